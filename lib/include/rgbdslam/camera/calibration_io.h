@@ -1,0 +1,18 @@
+#pragma once
+// Loads a camera calibration from an OpenCV FileStorage YAML file.
+// Accepted layouts (see config/cameras/README.md):
+//  - the project's own keys: name, image_width, image_height, fx, fy, cx, cy,
+//    distortion (k1 k2 p1 p2 k3, optional, default zeros), depth_factor;
+//  - ORB-SLAM style: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1 ... Camera.k3
+//    (optional), Camera.width, Camera.height, DepthMapFactor.
+// A missing or ill-typed required key is an error naming the key and the file.
+#include <string>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/util/expected.h"
+
+namespace rgbdslam {
+
+Expected<PinholeCamera> loadCamera(const std::string& path);
+
+}  // namespace rgbdslam

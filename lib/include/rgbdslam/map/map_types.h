@@ -1,0 +1,60 @@
+#pragma once
+// Plain data exchanged between tracker and mapper (and carried by keyframe_t / map_t).
+// Ids: keyframes count from 0; provisional points created by the tracker at keyframe k get
+// ids k * kPointsPerKeyframe + i, so tracker and mapper name them alike without talking.
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "rgbdslam/geometry/se3.h"
+
+namespace rgbdslam {
+
+using KeyframeId = int64_t;
+using PointId = int64_t;
+constexpr int64_t kPointsPerKeyframe = int64_t{1} << 20;
+
+struct Measurement {
+  PointId point_id = -1;
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // pixel at level 0 [px]
+  int level = 0;                                 // pyramid level found at
+  double depth = 0.0;  // measured depth at the corner [m]; 0 = no valid reading
+};
+
+struct MapPointData {
+  PointId id = -1;
+  Vec3 p_w = Vec3::Zero();            // position in the world [m]
+  KeyframeId source_keyframe = -1;    // keyframe holding the point's patch
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // pixel in the source keyframe, level 0
+  int level = 0;                      // pyramid level of the patch
+};
+
+struct KeyframeData {
+  int64_t utime = 0;        // acquisition time [us]
+  int64_t map_id = 0;       // the tracker session's map
+  KeyframeId id = -1;
+  SE3 T_w_c;
+  cv::Mat grey;             // CV_8UC1
+  cv::Mat depth;            // CV_16UC1 raw units (0 = none), or empty
+  double depth_scale = 5000.0;  // raw units per metre
+  std::vector<Measurement> measurements;
+  std::vector<MapPointData> new_points;
+};
+
+struct KeyframePose {
+  KeyframeId id = -1;
+  SE3 T_w_c;
+};
+
+struct MapUpdate {
+  int64_t utime = 0;        // publication time [us]
+  int64_t map_id = 0;
+  int64_t version = 0;      // increases by one per published change
+  bool is_snapshot = false; // true: full map; false: delta against version - 1
+  std::vector<KeyframeId> acked_keyframes;
+  std::vector<KeyframePose> keyframes;
+  std::vector<MapPointData> points;
+  std::vector<PointId> removed_points;
+};
+
+}  // namespace rgbdslam

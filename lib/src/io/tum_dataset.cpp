@@ -1,0 +1,173 @@
+#include "rgbdslam/io/tum_dataset.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+namespace rgbdslam {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Stamped {
+  double t;
+  std::string path;
+};
+
+// Parses "timestamp relative/path" lines; every named file must exist.
+Expected<std::vector<Stamped>> readList(const std::string& dir, const std::string& name) {
+  const std::string list_path = (fs::path(dir) / name).string();
+  std::ifstream file(list_path);
+  if (!file) return Error{list_path + ": cannot open (is " + dir + " a TUM RGB-D directory?)"};
+  std::vector<Stamped> list;
+  std::string line;
+  for (int number = 1; std::getline(file, line); ++number) {
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::istringstream in(line);
+    Stamped entry;
+    std::string rest;
+    const std::string where = list_path + ":" + std::to_string(number) + ": ";
+    if (!(in >> entry.t >> entry.path) || !std::isfinite(entry.t)) {
+      return Error{where + "expected 'timestamp path'"};
+    }
+    if (in >> rest) return Error{where + "unexpected text '" + rest + "' after the path"};
+    if (!fs::is_regular_file(fs::path(dir) / entry.path)) {
+      return Error{where + "names " + entry.path + ", which does not exist"};
+    }
+    if (!list.empty() && entry.t <= list.back().t) return Error{where + "timestamps must increase"};
+    list.push_back(entry);
+  }
+  if (list.empty()) return Error{list_path + ": lists no images"};
+  return list;
+}
+
+// One-to-one pairing by smallest |dt| first (as the benchmark's associate.py), in rgb order.
+std::vector<TumEntry> associate(const std::vector<Stamped>& rgb, const std::vector<Stamped>& depth,
+                                const TumOptions& options) {
+  struct Candidate {
+    double dt;
+    size_t i_rgb, i_depth;
+  };
+  std::vector<Candidate> candidates;
+  size_t start = 0;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    while (start < depth.size() && depth[start].t < rgb[i].t - options.max_dt_s) ++start;
+    for (size_t j = start; j < depth.size() && depth[j].t <= rgb[i].t + options.max_dt_s; ++j) {
+      candidates.push_back({std::abs(depth[j].t - rgb[i].t), i, j});
+    }
+  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.dt < b.dt; });
+  std::vector<long> partner(rgb.size(), -1);
+  std::vector<bool> depth_used(depth.size(), false);
+  for (const auto& c : candidates) {
+    if (partner[c.i_rgb] >= 0 || depth_used[c.i_depth]) continue;
+    partner[c.i_rgb] = static_cast<long>(c.i_depth);
+    depth_used[c.i_depth] = true;
+  }
+  std::vector<TumEntry> entries;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    TumEntry e{rgb[i].t, std::numeric_limits<double>::quiet_NaN(), rgb[i].path, ""};
+    if (partner[i] >= 0) {
+      e.t_depth = depth[partner[i]].t;
+      e.depth_path = depth[partner[i]].path;
+    } else if (options.require_depth) {
+      continue;
+    }
+    entries.push_back(e);
+  }
+  return entries;
+}
+
+FrameResult badFrame(const std::string& message) {
+  FrameResult result;
+  result.status = FrameResult::Status::kBadFrame;
+  result.error = message;
+  return result;
+}
+
+std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
+
+}  // namespace
+
+Expected<std::vector<TumEntry>> readTumIndex(const std::string& dir, const TumOptions& options) {
+  if (!fs::is_directory(dir)) return Error{dir + ": no such directory"};
+  auto rgb = readList(dir, "rgb.txt");
+  if (!rgb) return Error{rgb.error()};
+  auto depth = readList(dir, "depth.txt");
+  if (!depth) return Error{depth.error()};
+  auto entries = associate(*rgb, *depth, options);
+  if (entries.empty()) return Error{dir + ": no colour image has a depth image within " + std::to_string(options.max_dt_s) + " s"};
+  return entries;
+}
+
+TumSource::TumSource(std::string dir, std::vector<TumEntry> entries, PinholeCamera camera)
+    : dir_(std::move(dir)), entries_(std::move(entries)), camera_(std::move(camera)) {}
+
+FrameResult TumSource::next() {
+  if (next_ >= entries_.size()) return FrameResult{};
+  return read(next_++);
+}
+
+FrameResult TumSource::read(size_t i) const {
+  const TumEntry& e = entries_.at(i);
+  const std::string rgb_file = (fs::path(dir_) / e.rgb_path).string();
+  FrameResult result;
+  RgbdFrame& frame = result.frame;
+  frame.colour = cv::imread(rgb_file, cv::IMREAD_UNCHANGED);
+  if (frame.colour.empty()) return badFrame(rgb_file + ": cannot decode (missing, truncated or not an image)");
+  if (frame.colour.depth() != CV_8U) return badFrame(rgb_file + ": colour image is not 8-bit");
+  if (frame.colour.channels() == 4) cv::cvtColor(frame.colour, frame.colour, cv::COLOR_BGRA2BGR);
+  if (frame.colour.channels() == 1) cv::cvtColor(frame.colour, frame.colour, cv::COLOR_GRAY2BGR);
+  if (frame.colour.cols != camera_.width || frame.colour.rows != camera_.height) {
+    return badFrame(rgb_file + ": image is " + sizeText(frame.colour) + " but the camera file says " +
+                    std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  }
+  if (!e.depth_path.empty()) {
+    const std::string depth_file = (fs::path(dir_) / e.depth_path).string();
+    frame.depth = cv::imread(depth_file, cv::IMREAD_UNCHANGED);
+    if (frame.depth.empty()) return badFrame(depth_file + ": cannot decode (missing, truncated or not an image)");
+    if (frame.depth.type() != CV_16UC1) {
+      return badFrame(depth_file + ": depth must be a 16-bit single-channel image, this one is " +
+                      std::to_string(frame.depth.elemSize1() * 8) + "-bit with " +
+                      std::to_string(frame.depth.channels()) + " channel(s)");
+    }
+    if (frame.depth.size() != frame.colour.size()) {
+      return badFrame(depth_file + ": depth is " + sizeText(frame.depth) + ", colour is " + sizeText(frame.colour));
+    }
+  }
+  frame.utime = static_cast<int64_t>(std::llround(e.t_rgb * 1e6));
+  frame.seq = static_cast<int64_t>(i);
+  frame.depth_scale = camera_.depth_factor;
+  frame.camera_name = camera_.name;
+  result.status = FrameResult::Status::kFrame;
+  return result;
+}
+
+double TumSource::nominalRateHz() const {
+  if (entries_.size() < 2) return 30.0;
+  const double span = entries_.back().t_rgb - entries_.front().t_rgb;
+  return span > 0 ? (entries_.size() - 1) / span : 30.0;
+}
+
+std::string TumSource::describe() const {
+  char rate[32];
+  std::snprintf(rate, sizeof(rate), "%.1f", nominalRateHz());
+  return "tum:" + dir_ + " (" + std::to_string(entries_.size()) + " frames, " + rate + " Hz)";
+}
+
+Expected<std::unique_ptr<TumSource>> openTumDataset(const std::string& dir,
+                                                    const PinholeCamera& camera,
+                                                    const TumOptions& options) {
+  auto entries = readTumIndex(dir, options);
+  if (!entries) return Error{entries.error()};
+  return std::make_unique<TumSource>(dir, std::move(*entries), camera);
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,73 @@
+#pragma once
+// Conversions between the library's plain types and the LCM messages (lcmtypes/).
+// Handlers call only these: fromLcm() validates everything a message claims (sizes,
+// formats, finiteness) and returns an error instead of trusting it.
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <rgbdslam/keyframe_t.hpp>
+#include <rgbdslam/map_t.hpp>
+#include <rgbdslam/pose_t.hpp>
+#include <rgbdslam/rgbd_frame_t.hpp>
+#include <rgbdslam/status_t.hpp>
+
+#include "rgbdslam/image/rgbd_frame.h"
+#include "rgbdslam/map/map_types.h"
+#include "rgbdslam/tracking/pose_estimate.h"
+#include "rgbdslam/util/component_status.h"
+#include "rgbdslam/util/expected.h"
+
+namespace rgbdslam {
+
+// How frames are encoded on the wire.
+struct FrameEncoding {
+  bool jpeg_colour = false;  // false: raw BGR (lossless); true: JPEG
+  int jpeg_quality = 90;     // JPEG quality [1, 100]
+  bool zlib_depth = true;    // true: zlib-compressed depth (lossless); false: raw
+  int zlib_level = 1;        // zlib level [0, 9]; 1 is fastest with most of the gain
+};
+
+rgbdslam::rgbd_frame_t toLcm(const RgbdFrame& frame, const FrameEncoding& encoding);
+Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg);
+
+rgbdslam::pose_t toLcm(const PoseEstimate& pose);
+Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg);
+
+// Grey image as PNG (lossless), depth zlib-compressed.
+rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe);
+Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);
+
+rgbdslam::map_t toLcm(const MapUpdate& update);
+Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg);
+
+rgbdslam::status_t toLcm(const ComponentStatus& status);
+Expected<ComponentStatus> fromLcm(const rgbdslam::status_t& msg);
+
+// Decodes raw bytes as message type T. Rejects truncated data, trailing bytes (oversized or
+// a different type with a matching prefix) and a wrong type fingerprint, with a message.
+// The generated decoders resize arrays to the sizes a message claims; a negative or absurd
+// size throws (length_error, bad_alloc), which is caught here and reported like a bad message.
+template <typename T>
+Expected<T> decodeMessage(const void* data, size_t size) {
+  T msg;
+  if (size > static_cast<size_t>(std::numeric_limits<int>::max())) {
+    return Error{"message of " + std::to_string(size) + " bytes is too large"};
+  }
+  int used = -1;
+  try {
+    used = msg.decode(data, 0, static_cast<int>(size));
+  } catch (const std::exception& e) {
+    return Error{"message claims impossible array sizes for " + std::string(T::getTypeName()) +
+                 " (" + e.what() + ")"};
+  }
+  if (used < 0) return Error{"message does not decode as " + std::string(T::getTypeName()) +
+                             " (truncated, or another type), " + std::to_string(size) + " bytes"};
+  if (static_cast<size_t>(used) != size) {
+    return Error{"message has " + std::to_string(size - used) + " bytes beyond a " +
+                 std::string(T::getTypeName()) + " (oversized or another type)"};
+  }
+  return msg;
+}
+
+}  // namespace rgbdslam

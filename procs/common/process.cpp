@@ -1,0 +1,42 @@
+#include "common/process.h"
+
+#include <chrono>
+#include <csignal>
+#include <iostream>
+
+namespace rgbdslam {
+namespace {
+std::atomic<bool> g_stop{false};  // the only global: written by the signal handler
+extern "C" void onStopSignal(int) { g_stop.store(true); }
+}  // namespace
+
+std::atomic<bool>& installStopHandlers() {
+  struct sigaction action {};
+  action.sa_handler = onStopSignal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  return g_stop;
+}
+
+int64_t utimeNow() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url) {
+  auto lcm = std::make_unique<lcm::LCM>(url);
+  if (!lcm->good()) {
+    return Error{"cannot open LCM at '" + url +
+                 "' (bad URL, or no multicast route: try 'ip route add 224.0.0.0/4 dev lo')"};
+  }
+  return lcm;
+}
+
+int usageError(const std::string& program, const std::string& message) {
+  std::cerr << program << ": error: " << message << "\n";
+  return 2;
+}
+
+}  // namespace rgbdslam

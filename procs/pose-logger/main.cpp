@@ -1,0 +1,78 @@
+// pose-logger: subscribes SLAM_POSE and writes a TUM trajectory and a CSV. See --help.
+#include <iostream>
+
+#include "common/cli.h"
+#include "common/lcm_conversions.h"
+#include "common/process.h"
+#include "pose-logger/pose_log_writer.h"
+
+using namespace rgbdslam;
+
+namespace {
+
+constexpr int kHandleTimeoutMs = 100;  // [ms] how often the stop flag is checked
+
+// Converts each message and hands it to the writer; bad messages are counted, not fatal.
+class PoseLogger {
+ public:
+  explicit PoseLogger(PoseLogWriter writer) : writer_(std::move(writer)) {}
+  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    auto msg = decodeMessage<rgbdslam::pose_t>(buffer->data, buffer->data_size);
+    auto pose = msg ? fromLcm(*msg) : Expected<PoseEstimate>(Error{msg.error()});
+    if (!pose) {
+      ++bad_messages_;
+      std::cerr << "pose-logger: ignoring a bad message on " << channel << ": " << pose.error() << "\n";
+      return;
+    }
+    if (Status written = writer_.write(*pose); !written) {
+      ++write_errors_;
+      std::cerr << "pose-logger: error: " << written.error() << "\n";
+    }
+  }
+  void printSummary() const {
+    std::cerr << "pose-logger: " << writer_.csvLines() << " poses (" << writer_.trajectoryLines()
+              << " in the trajectory), " << bad_messages_ << " bad messages, " << write_errors_
+              << " write errors\n";
+  }
+  int exitStatus() const { return write_errors_ > 0 ? 1 : 0; }
+
+ private:
+  PoseLogWriter writer_;
+  long bad_messages_ = 0, write_errors_ = 0;
+};
+
+CommandLine makeCommandLine() {
+  CommandLine cli("pose-logger", "Writes the poses on SLAM_POSE to a TUM trajectory and a CSV.");
+  cli.option("output", "TRAJ.txt", "TUM trajectory file: 't tx ty tz qx qy qz qw' per tracked pose");
+  cli.option("csv", "FILE", "CSV of every pose with state, points, quality, latency", "TRAJ with .csv");
+  cli.option("channel", "NAME", "LCM channel to subscribe", "SLAM_POSE");
+  addLcmUrlOption(cli);
+  return cli;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CommandLine cli = makeCommandLine();
+  if (Status parsed = cli.parse(argc, argv); !parsed) return usageError("pose-logger", parsed.error());
+  if (cli.helpRequested()) {
+    std::cout << cli.helpText();
+    return 0;
+  }
+  if (!cli.has("output")) return usageError("pose-logger", "--output is required (see --help)");
+  const std::string output = cli.get("output");
+  const std::string csv = cli.has("csv") ? cli.get("csv") : defaultCsvPath(output);
+  auto writer = PoseLogWriter::open(output, csv);
+  if (!writer) return usageError("pose-logger", writer.error());
+  auto lcm = openLcm(cli.get("lcm-url"));
+  if (!lcm) return usageError("pose-logger", lcm.error());
+  std::cerr << "pose-logger configuration:\n  output " << output << "\n  csv " << csv
+            << "\n  channel " << cli.get("channel") << "\n  lcm-url " << cli.get("lcm-url") << "\n";
+
+  PoseLogger logger(std::move(*writer));
+  (*lcm)->subscribe(cli.get("channel"), &PoseLogger::onMessage, &logger);
+  const std::atomic<bool>& stop = installStopHandlers();
+  while (!stop) (*lcm)->handleTimeout(kHandleTimeoutMs);
+  logger.printSummary();
+  return logger.exitStatus();
+}

@@ -1,0 +1,104 @@
+#include "pose-logger/pose_log_writer.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "rgbdslam/io/trajectory_io.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr const char* kCsvHeader =
+    "utime,seq,state,points_tracked,quality,latency_ms,tx,ty,tz,qx,qy,qz,qw\n";
+
+// One write(2) per line; a short write (disk full, signal) is continued, and reported if it fails.
+Status writeLine(int fd, const std::string& line, const std::string& path) {
+  size_t done = 0;
+  while (done < line.size()) {
+    const ssize_t n = ::write(fd, line.data() + done, line.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return Error{path + ": write failed: " + std::strerror(errno)};
+    done += static_cast<size_t>(n);
+  }
+  return {};
+}
+
+bool vouchedFor(TrackingState state) {
+  return state == TrackingState::kTracking || state == TrackingState::kDodgy ||
+         state == TrackingState::kRelocalised;
+}
+
+}  // namespace
+
+const char* stateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kInitialising: return "initialising";
+    case TrackingState::kTracking: return "tracking";
+    case TrackingState::kDodgy: return "dodgy";
+    case TrackingState::kLost: return "lost";
+    case TrackingState::kRelocalised: return "relocalised";
+  }
+  return "unknown";
+}
+
+std::string defaultCsvPath(const std::string& trajectory_path) {
+  const size_t dot = trajectory_path.rfind('.');
+  const size_t slash = trajectory_path.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return trajectory_path + ".csv";
+  return trajectory_path.substr(0, dot) + ".csv";
+}
+
+Expected<PoseLogWriter> PoseLogWriter::open(const std::string& trajectory_path,
+                                            const std::string& csv_path) {
+  const int flags = O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC;
+  const int trajectory_fd = ::open(trajectory_path.c_str(), flags, 0644);
+  if (trajectory_fd < 0) return Error{trajectory_path + ": cannot create: " + std::strerror(errno)};
+  const int csv_fd = ::open(csv_path.c_str(), flags, 0644);
+  if (csv_fd < 0) {
+    ::close(trajectory_fd);
+    return Error{csv_path + ": cannot create: " + std::strerror(errno)};
+  }
+  PoseLogWriter writer(trajectory_fd, csv_fd, trajectory_path, csv_path);
+  if (Status s = writeLine(csv_fd, kCsvHeader, csv_path); !s) return Error{s.error()};
+  return writer;
+}
+
+PoseLogWriter::PoseLogWriter(int trajectory_fd, int csv_fd, std::string trajectory_path,
+                             std::string csv_path)
+    : trajectory_fd_(trajectory_fd), csv_fd_(csv_fd), trajectory_path_(std::move(trajectory_path)),
+      csv_path_(std::move(csv_path)) {}
+
+PoseLogWriter::PoseLogWriter(PoseLogWriter&& other) noexcept
+    : trajectory_fd_(other.trajectory_fd_), csv_fd_(other.csv_fd_),
+      trajectory_path_(std::move(other.trajectory_path_)), csv_path_(std::move(other.csv_path_)),
+      trajectory_lines_(other.trajectory_lines_), csv_lines_(other.csv_lines_) {
+  other.trajectory_fd_ = other.csv_fd_ = -1;
+}
+
+PoseLogWriter::~PoseLogWriter() {
+  if (trajectory_fd_ >= 0) ::close(trajectory_fd_);
+  if (csv_fd_ >= 0) ::close(csv_fd_);
+}
+
+Status PoseLogWriter::write(const PoseEstimate& pose) {
+  const Vec3& t = pose.T_w_c.translation();
+  const Eigen::Quaterniond& q = pose.T_w_c.rotation();
+  char csv[512];
+  std::snprintf(csv, sizeof(csv), "%lld,%lld,%s,%d,%.4f,%.3f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
+                static_cast<long long>(pose.utime), static_cast<long long>(pose.seq),
+                stateName(pose.state), pose.points_tracked, pose.quality, pose.latency_ms, t.x(),
+                t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  if (Status s = writeLine(csv_fd_, csv, csv_path_); !s) return s;
+  ++csv_lines_;
+  if (!vouchedFor(pose.state)) return {};
+  const std::string line = formatTumLine({pose.utime * 1e-6, pose.T_w_c});
+  if (Status s = writeLine(trajectory_fd_, line, trajectory_path_); !s) return s;
+  ++trajectory_lines_;
+  return {};
+}
+
+}  // namespace rgbdslam

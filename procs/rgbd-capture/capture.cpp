@@ -1,0 +1,141 @@
+#include "rgbd-capture/capture.h"
+
+#include <chrono>
+#include <iostream>
+#include <sstream>
+#include <thread>
+
+#include "common/process.h"
+#include "common/source_factory.h"
+#include "rgbdslam/camera/calibration_io.h"
+
+namespace rgbdslam {
+namespace {
+constexpr int64_t kSleepSliceUs = 20000;  // [us] longest sleep between checks of the stop flag
+}
+
+Expected<CaptureOptions> CaptureOptions::fromCommandLine(const CommandLine& cli) {
+  CaptureOptions o;
+  if (!cli.has("source")) return Error{"--source is required (see --help)"};
+  o.source = cli.get("source");
+  o.camera_path = cli.get("camera");
+  if (cli.has("rate")) {
+    auto rate = cli.getDouble("rate");
+    if (!rate || *rate < 0) return Error{"--rate must be a number >= 0"};
+    o.rate_hz = *rate;
+  }
+  o.step = cli.has("step");
+  o.channel = cli.get("channel");
+  const std::string colour = cli.get("colour"), depth = cli.get("depth");
+  if (colour != "raw" && colour != "jpeg") return Error{"--colour must be raw or jpeg"};
+  if (depth != "raw" && depth != "zlib") return Error{"--depth must be raw or zlib"};
+  o.encoding.jpeg_colour = colour == "jpeg";
+  o.encoding.zlib_depth = depth == "zlib";
+  auto quality = cli.getInt("jpeg-quality");
+  if (!quality || *quality < 1 || *quality > 100) return Error{"--jpeg-quality must be 1-100"};
+  o.encoding.jpeg_quality = static_cast<int>(*quality);
+  auto max_frames = cli.getInt("max-frames");
+  if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
+  o.max_frames = *max_frames;
+  o.lcm_url = cli.get("lcm-url");
+  return o;
+}
+
+std::string CaptureOptions::describe() const {
+  std::ostringstream out;
+  out << "rgbd-capture configuration:\n  source " << source << "\n  camera "
+      << (camera_path.empty() ? "(none)" : camera_path) << "\n  rate "
+      << (rate_hz ? (*rate_hz > 0 ? std::to_string(*rate_hz) + " Hz" : "unpaced") : "recorded timestamps")
+      << (step ? ", one frame per Enter" : "") << "\n  channel " << channel << "\n  colour "
+      << (encoding.jpeg_colour ? "jpeg q" + std::to_string(encoding.jpeg_quality) : "raw")
+      << "\n  depth " << (encoding.zlib_depth ? "zlib" : "raw") << "\n  max-frames "
+      << max_frames << "\n  lcm-url " << lcm_url << "\n";
+  return out.str();
+}
+
+Expected<std::unique_ptr<Capture>> Capture::create(const CaptureOptions& options) {
+  std::optional<PinholeCamera> camera;
+  if (!options.camera_path.empty()) {
+    auto loaded = loadCamera(options.camera_path);
+    if (!loaded) return Error{loaded.error()};
+    camera = *loaded;
+  }
+  auto source = openSource(options.source, camera);
+  if (!source) return Error{source.error()};
+  auto lcm = openLcm(options.lcm_url);
+  if (!lcm) return Error{lcm.error()};
+  return std::unique_ptr<Capture>(
+      new Capture(options, camera, std::move(*source), std::move(*lcm)));
+}
+
+Capture::Capture(CaptureOptions options, std::optional<PinholeCamera> camera,
+                 std::unique_ptr<FrameSource> source, std::unique_ptr<lcm::LCM> lcm)
+    : options_(std::move(options)), camera_(std::move(camera)), source_(std::move(source)),
+      lcm_(std::move(lcm)) {}
+
+std::string Capture::describeSource() const { return "  opened " + source_->describe(); }
+
+std::string Capture::checkAgainstCamera(const RgbdFrame& frame) const {
+  if (!camera_) return "";
+  if (frame.width() != camera_->width || frame.height() != camera_->height) {
+    return "frame " + std::to_string(frame.seq) + " is " + std::to_string(frame.width()) + "x" +
+           std::to_string(frame.height()) + " but " + options_.camera_path + " says " +
+           std::to_string(camera_->width) + "x" + std::to_string(camera_->height);
+  }
+  return "";
+}
+
+bool Capture::waitForTurn(const RgbdFrame& frame, const std::atomic<bool>& stop) {
+  if (options_.step) {
+    std::cerr << "frame " << frame.seq << ": press Enter to publish" << std::endl;
+    std::string line;
+    return static_cast<bool>(std::getline(std::cin, line)) && !stop;
+  }
+  const int64_t now = utimeNow();
+  if (published_ == 0) {
+    first_utime_ = frame.utime;
+    first_wall_us_ = now;
+    return !stop;
+  }
+  int64_t due = now;
+  if (!options_.rate_hz) {
+    if (source_->nominalRateHz() > 0) due = first_wall_us_ + (frame.utime - first_utime_);
+  } else if (*options_.rate_hz > 0) {
+    due = first_wall_us_ + static_cast<int64_t>(published_ * 1e6 / *options_.rate_hz);
+  }
+  for (int64_t wait = due - utimeNow(); wait > 0 && !stop; wait = due - utimeNow()) {
+    std::this_thread::sleep_for(std::chrono::microseconds(std::min(wait, kSleepSliceUs)));
+  }
+  return !stop;
+}
+
+int Capture::run(const std::atomic<bool>& stop) {
+  bool failed = false;
+  while (!stop && (options_.max_frames == 0 || published_ < options_.max_frames)) {
+    FrameResult result = source_->next();
+    if (result.status == FrameResult::Status::kEnd) break;
+    if (result.status == FrameResult::Status::kFailed) {
+      std::cerr << "rgbd-capture: error: " << result.error << "\n";
+      failed = true;
+      break;
+    }
+    std::string problem = result.status == FrameResult::Status::kBadFrame ? result.error : checkAgainstCamera(result.frame);
+    if (!problem.empty()) {
+      std::cerr << "rgbd-capture: error: " << problem << " (frame skipped)\n";
+      ++bad_;
+      continue;
+    }
+    if (!waitForTurn(result.frame, stop)) break;
+    const rgbdslam::rgbd_frame_t msg = toLcm(result.frame, options_.encoding);
+    if (lcm_->publish(options_.channel, &msg) != 0) {
+      std::cerr << "rgbd-capture: error: publishing frame " << result.frame.seq << " failed\n";
+      ++bad_;
+      continue;
+    }
+    ++published_;
+  }
+  std::cerr << "rgbd-capture: published " << published_ << " frames, " << bad_ << " bad\n";
+  return (failed || bad_ > 0) ? 1 : 0;
+}
+
+}  // namespace rgbdslam

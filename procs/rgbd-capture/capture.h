@@ -1,0 +1,54 @@
+#pragma once
+// The capture loop: read a frame from the source, check it against the camera, pace it,
+// encode and publish it. Bad frames are reported (naming the file) and skipped; the exit
+// status tells whether any were.
+#include <atomic>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "common/cli.h"
+#include "common/lcm_conversions.h"
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/io/frame_source.h"
+
+namespace rgbdslam {
+
+struct CaptureOptions {
+  std::string source;                 // source spec (tum:, synth:, openni2:, lcmlog:)
+  std::string camera_path;            // calibration file; empty = none
+  std::optional<double> rate_hz;      // [frames/s]; 0 = unpaced; nullopt = recorded timestamps
+  bool step = false;                  // one frame per Enter key
+  std::string channel = "RGBD_FRAME";
+  FrameEncoding encoding;
+  long max_frames = 0;                // 0 = all
+  std::string lcm_url;
+
+  static Expected<CaptureOptions> fromCommandLine(const CommandLine& cli);
+  std::string describe() const;       // the effective configuration, one option per line
+};
+
+class Capture {
+ public:
+  static Expected<std::unique_ptr<Capture>> create(const CaptureOptions& options);
+  std::string describeSource() const;
+  // Runs until the source ends, fails, max_frames, or 'stop'. Returns the exit status:
+  // 0 all frames published, 1 some frames bad or the source failed.
+  int run(const std::atomic<bool>& stop);
+
+ private:
+  Capture(CaptureOptions options, std::optional<PinholeCamera> camera,
+          std::unique_ptr<FrameSource> source, std::unique_ptr<lcm::LCM> lcm);
+  std::string checkAgainstCamera(const RgbdFrame& frame) const;  // empty when fine
+  bool waitForTurn(const RgbdFrame& frame, const std::atomic<bool>& stop);
+
+  CaptureOptions options_;
+  std::optional<PinholeCamera> camera_;
+  std::unique_ptr<FrameSource> source_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  long published_ = 0, bad_ = 0;
+  int64_t first_utime_ = 0, first_wall_us_ = 0;
+};
+
+}  // namespace rgbdslam

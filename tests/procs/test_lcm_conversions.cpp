@@ -1,0 +1,195 @@
+#include "common/lcm_conversions.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace rgbdslam {
+namespace {
+
+RgbdFrame makeFrame() {
+  RgbdFrame frame;
+  frame.utime = 1700000000123456;
+  frame.seq = 42;
+  frame.colour = cv::Mat(48, 64, CV_8UC3);
+  cv::randu(frame.colour, 0, 255);
+  frame.depth = cv::Mat(48, 64, CV_16UC1);
+  cv::randu(frame.depth, 0, 20000);
+  frame.depth_scale = 5000.0;
+  frame.camera_name = "tum_fr3";
+  return frame;
+}
+
+template <typename T>
+std::vector<uint8_t> encode(const T& msg) {
+  std::vector<uint8_t> bytes(msg.getEncodedSize());
+  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+SE3 somePose() {
+  Vec6 xi;
+  xi << 0.5, -1.0, 2.0, 0.1, -0.3, 0.2;
+  return SE3::exp(xi);
+}
+
+TEST(LcmConversions, FrameRoundTripIsExactForRawAndZlib) {
+  const RgbdFrame frame = makeFrame();
+  for (bool zlib : {false, true}) {
+    FrameEncoding encoding;
+    encoding.zlib_depth = zlib;
+    const auto bytes = encode(toLcm(frame, encoding));
+    auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(bytes.data(), bytes.size());
+    ASSERT_TRUE(msg) << msg.error();
+    auto back = fromLcm(*msg);
+    ASSERT_TRUE(back) << back.error();
+    EXPECT_EQ(back->utime, frame.utime);
+    EXPECT_EQ(back->seq, frame.seq);
+    EXPECT_EQ(back->camera_name, "tum_fr3");
+    EXPECT_EQ(cv::norm(back->colour, frame.colour, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(back->depth, frame.depth, cv::NORM_INF), 0.0);
+  }
+}
+
+TEST(LcmConversions, JpegColourDecodesToTheRightSize) {
+  FrameEncoding encoding;
+  encoding.jpeg_colour = true;
+  auto back = fromLcm(toLcm(makeFrame(), encoding));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->colour.size(), cv::Size(64, 48));
+}
+
+TEST(LcmConversions, FrameWithLyingSizesIsRejected) {
+  rgbdslam::rgbd_frame_t msg = toLcm(makeFrame(), FrameEncoding{});
+  msg.width = 65;
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(makeFrame(), FrameEncoding{false, 90, false, 1});
+  msg.depth.resize(100);
+  msg.depth_size = 100;
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(makeFrame(), FrameEncoding{});
+  msg.depth_scale = 0;
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(makeFrame(), FrameEncoding{});
+  msg.colour_format = 17;
+  EXPECT_FALSE(fromLcm(msg));
+  msg.width = -5;
+  EXPECT_FALSE(fromLcm(msg));
+}
+
+TEST(LcmConversions, TruncatedOversizedAndWrongTypeMessagesAreRejected) {
+  const auto bytes = encode(toLcm(makeFrame(), FrameEncoding{}));
+  for (size_t cut : {size_t{0}, size_t{4}, size_t{20}, bytes.size() / 2, bytes.size() - 1}) {
+    EXPECT_FALSE(decodeMessage<rgbdslam::rgbd_frame_t>(bytes.data(), cut)) << cut;
+  }
+  std::vector<uint8_t> longer = bytes;
+  longer.resize(bytes.size() + 10, 0);
+  auto oversized = decodeMessage<rgbdslam::rgbd_frame_t>(longer.data(), longer.size());
+  ASSERT_FALSE(oversized);
+  EXPECT_NE(oversized.error().find("10 bytes beyond"), std::string::npos);
+  EXPECT_FALSE(decodeMessage<rgbdslam::pose_t>(bytes.data(), bytes.size()));
+}
+
+TEST(LcmConversions, NegativeArraySizeIsRejectedWithoutThrowing) {
+  rgbdslam::status_t status;
+  status.component = "x";
+  status.state = "y";
+  status.num_counters = 0;
+  status.num_timings = 0;
+  auto bytes = encode(status);
+  // Layout: hash(8) utime(8) component(4+2) state(4+2) num_counters(4): make it -1.
+  const size_t offset = 8 + 8 + 6 + 6;
+  const uint8_t minus_one[4] = {0xff, 0xff, 0xff, 0xff};
+  std::memcpy(bytes.data() + offset, minus_one, 4);
+  EXPECT_FALSE(decodeMessage<rgbdslam::status_t>(bytes.data(), bytes.size()));
+}
+
+TEST(LcmConversions, PoseRoundTrip) {
+  PoseEstimate pose;
+  pose.utime = 123;
+  pose.seq = 7;
+  pose.T_w_c = somePose();
+  pose.state = TrackingState::kDodgy;
+  pose.points_tracked = 150;
+  pose.quality = 0.5;
+  pose.latency_ms = 3.25;
+  auto back = fromLcm(toLcm(pose));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->state, TrackingState::kDodgy);
+  EXPECT_EQ(back->points_tracked, 150);
+  EXPECT_FLOAT_EQ(back->latency_ms, 3.25);
+  EXPECT_LT((back->T_w_c.inverse() * pose.T_w_c).log().norm(), 1e-12);
+}
+
+TEST(LcmConversions, PoseWithBadQuaternionOrStateIsRejected) {
+  rgbdslam::pose_t msg = toLcm(PoseEstimate{});
+  msg.orientation[0] = 2.0;
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(PoseEstimate{});
+  msg.position[1] = std::nan("");
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(PoseEstimate{});
+  msg.state = 9;
+  EXPECT_FALSE(fromLcm(msg));
+}
+
+TEST(LcmConversions, KeyframeRoundTrip) {
+  KeyframeData keyframe;
+  keyframe.utime = 99;
+  keyframe.map_id = 1234;
+  keyframe.id = 3;
+  keyframe.T_w_c = somePose();
+  keyframe.grey = cv::Mat(48, 64, CV_8UC1);
+  cv::randu(keyframe.grey, 0, 255);
+  keyframe.depth = makeFrame().depth;
+  keyframe.measurements.push_back({17, Eigen::Vector2d(10.25, 20.5), 1, 1.5});
+  keyframe.new_points.push_back({3 * kPointsPerKeyframe + 1, Vec3(1, 2, 3), 3, Eigen::Vector2d(5, 6), 2});
+  const auto bytes = encode(toLcm(keyframe));
+  auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());
+  ASSERT_TRUE(msg) << msg.error();
+  auto back = fromLcm(*msg);
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->id, 3);
+  EXPECT_EQ(back->map_id, 1234);
+  EXPECT_EQ(cv::norm(back->grey, keyframe.grey, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(back->depth, keyframe.depth, cv::NORM_INF), 0.0);
+  ASSERT_EQ(back->measurements.size(), 1u);
+  EXPECT_EQ(back->measurements[0].point_id, 17);
+  EXPECT_DOUBLE_EQ(back->measurements[0].uv.x(), 10.25);
+  EXPECT_EQ(back->measurements[0].level, 1);
+  ASSERT_EQ(back->new_points.size(), 1u);
+  EXPECT_EQ(back->new_points[0].id, 3 * kPointsPerKeyframe + 1);
+  EXPECT_EQ(back->new_points[0].p_w, Vec3(1, 2, 3));
+}
+
+TEST(LcmConversions, MapRoundTrip) {
+  MapUpdate update;
+  update.map_id = 1234;
+  update.version = 8;
+  update.is_snapshot = true;
+  update.acked_keyframes = {0, 1, 2};
+  update.keyframes.push_back({2, somePose()});
+  update.points.push_back({5, Vec3(0.5, 0.25, 3), 1, Eigen::Vector2d(100, 200), 0});
+  update.removed_points = {9, 10};
+  auto back = fromLcm(toLcm(update));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->version, 8);
+  EXPECT_TRUE(back->is_snapshot);
+  EXPECT_EQ(back->acked_keyframes, update.acked_keyframes);
+  EXPECT_EQ(back->removed_points, update.removed_points);
+  ASSERT_EQ(back->points.size(), 1u);
+  EXPECT_EQ(back->points[0].uv, Eigen::Vector2d(100, 200));
+  EXPECT_LT((back->keyframes[0].T_w_c.inverse() * somePose()).log().norm(), 1e-12);
+}
+
+TEST(LcmConversions, StatusRoundTrip) {
+  ComponentStatus status{5, "rgbd-tracker", "tracking", {{"frames", 10}, {"bad_messages", 1}}, {{"track_ms", 3.5}}};
+  auto back = fromLcm(toLcm(status));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->component, "rgbd-tracker");
+  EXPECT_EQ(back->counters, status.counters);
+  EXPECT_EQ(back->timings_ms, status.timings_ms);
+}
+
+}  // namespace
+}  // namespace rgbdslam
