@@ -1,0 +1,133 @@
+#pragma once
+// Synthetic RGB-D sequences with exact ground truth: a textured room and a long corridor
+// (weak texture, glass cabinets, black surfaces, a room in the middle), rendered by
+// analytic ray casting against axis-aligned boxes, with the Kinect error model of the paper
+// (sigma(d) = a d^2, range limits, disparity quantisation, holes).
+//
+// Why: the SLAM pipeline is checked end to end against exact poses; the capture process
+// publishes these frames like a device would.
+//
+// Frames: the world is z-up; T_w_c maps camera coordinates (x right, y down, z forward) into
+// the world. Depth is the camera-frame z of the surface point [m], stored raw in units of
+// 1/depth_factor m (5000 per metre). Times are host-clock microseconds from a fixed epoch.
+//
+// Determinism: everything random (textures, trajectory phases, noise) derives from
+// options.seed through std::mt19937_64 seeded per purpose and per frame, so the same
+// options give bit-identical frames in any order and on every call. The geometry, textures
+// and trajectory depend only on (scene, seed, num_frames, rate_hz), never on the noise
+// options: two scenes differing only in noise see the same surfaces.
+//
+// Call order: parseSyntheticSpec() (or fill SyntheticOptions), construct SyntheticScene
+// (builds and bakes textures, ~0.1-0.5 s), then render(i) in any order; render() is const
+// and may be called from several threads.
+#include <cstdint>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/image/rgbd_frame.h"
+#include "rgbdslam/io/frame_source.h"
+#include "rgbdslam/io/trajectory_io.h"
+#include "rgbdslam/util/expected.h"
+
+namespace rgbdslam {
+
+enum class SyntheticSceneKind { kRoom, kCorridor };
+
+// What a pixel sees (the optional label image of SyntheticScene::renderPose).
+enum class SyntheticSurface : uint8_t {
+  kNothing = 0,  // no surface (does not happen in the closed scenes)
+  kDiffuse = 1,  // textured surface that returns depth
+  kGlass = 2,    // glass: colour but no depth
+  kBlack = 3,    // black, light-absorbing: dark colour and no depth
+};
+
+// The Kinect error model (paper eq. 17 and the sensor's disparity quantisation). Applied in
+// this order to the exact depth z of a surface that returns depth:
+//   1. noise:      z_n = z + sigma(z) * N(0,1),   sigma(z) = sigma_coefficient * z^2;
+//   2. quantise:   z_q = f b / (s * round(f b / (s z_n))), i.e. disparity f b / z rounded to
+//                  steps of s = disparity_step_px (f = disparity_focal_px, b = baseline_m), so
+//                  the output lies on the sensor's depth grid like real Kinect data;
+//   3. range:      no reading unless min_range_m <= z_q <= max_range_m;
+//   4. sparsity:   each reading kept with probability depth_fraction;
+//   5. storage:    raw = round(z_q * depth_factor) (uint16).
+// Noise comes before quantisation (as in the sensor, where the disparity is what is noisy
+// and then quantised); with quantise off the error is exactly Gaussian with sigma(z).
+struct KinectNoiseOptions {
+  double sigma_coefficient = 3.331e-3;  // a in sigma(d) = a * d^2 [1/m]
+  double min_range_m = 0.5;             // no reading closer than this [m]
+  double max_range_m = 4.5;             // no reading farther than this [m]
+  bool quantise = true;                 // quantise depth in disparity (formula above)
+  double disparity_focal_px = 580.0;    // f of the IR camera for quantisation [px]
+  double baseline_m = 0.075;            // b, projector-camera baseline [m]
+  double disparity_step_px = 0.125;     // s, disparity resolution (1/8 px) [px]
+  double depth_fraction = 1.0;          // fraction of readings kept, in (0, 1] (sparse depth)
+  bool depth_enabled = true;            // false: no depth at all (all zero)
+  int depth_frames = -1;                // only frames 0..N-1 have depth (-1: all; 1: first only)
+  double image_noise_sigma = 2.0;       // Gaussian noise on each colour channel [grey levels]
+};
+
+struct SyntheticOptions {
+  SyntheticSceneKind scene = SyntheticSceneKind::kRoom;
+  uint64_t seed = 1;     // everything random derives from it
+  int num_frames = 0;    // 0: the scene's default length (room 600, corridor 3300)
+  double rate_hz = 30.0; // frame rate [Hz]
+  KinectNoiseOptions noise;
+};
+
+// "room" or "corridor" followed by optional ",key=value" pairs: seed, frames, rate,
+// depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
+// (image noise), depth_sigma (a), quantise (0|1). E.g. "room,seed=3,depth_fraction=0.3".
+// An unknown key or bad value is an Error naming it.
+Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
+// The spec string of 'options' (round-trips through parseSyntheticSpec), for logs.
+std::string formatSyntheticSpec(const SyntheticOptions& options);
+// Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1], ...).
+Status validateSyntheticOptions(const SyntheticOptions& options);
+
+namespace synthetic {
+struct World;  // boxes, baked textures and the trajectory (lib/src/io/synthetic_world.h)
+}
+
+class SyntheticScene {
+ public:
+  // Options must pass validateSyntheticOptions (asserted).
+  explicit SyntheticScene(const SyntheticOptions& options);
+  ~SyntheticScene();
+  SyntheticScene(const SyntheticScene&) = default;  // cheap: the baked world is shared
+  SyntheticScene& operator=(const SyntheticScene&) = default;
+
+  const SyntheticOptions& options() const { return options_; }
+  // 640x480, fx = fy = 525, cx = 319.5, cy = 239.5, no distortion, depth_factor 5000,
+  // name "synthetic" (= config/cameras/synthetic.yaml).
+  const PinholeCamera& camera() const { return camera_; }
+  size_t numFrames() const { return num_frames_; }
+  // 1700000000 s + i / rate_hz, in microseconds.
+  int64_t frameUtime(size_t i) const;
+  // T_w_c of frame i, exact (the pose render(i) uses).
+  SE3 groundTruthPose(size_t i) const;
+  // All frames, t = frameUtime(i) * 1e-6 s.
+  Trajectory groundTruth() const;
+  // Colour CV_8UC3 BGR, depth CV_16UC1 raw (0 = none), depth_scale 5000, camera_name
+  // "synthetic", seq = i, utime = frameUtime(i).
+  RgbdFrame render(size_t i) const;
+  // As render(i) but from an arbitrary pose (noise and depth schedule of frame i). If
+  // 'surfaces' is given it receives a CV_8UC1 image of SyntheticSurface values.
+  RgbdFrame renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces = nullptr) const;
+  // Writes rgb/, depth/ (16-bit PNG), rgb.txt, depth.txt and groundtruth.txt in the TUM
+  // layout (file names are the timestamps in seconds with 6 decimals).
+  Status writeTumDirectory(const std::string& dir) const;
+
+ private:
+  SyntheticOptions options_;
+  PinholeCamera camera_;
+  size_t num_frames_ = 0;
+  std::shared_ptr<const synthetic::World> world_;
+};
+
+// A FrameSource that renders the frames on the fly, in order.
+std::unique_ptr<FrameSource> makeSyntheticSource(const SyntheticOptions& options);
+
+}  // namespace rgbdslam

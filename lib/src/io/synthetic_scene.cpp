@@ -1,0 +1,307 @@
+// The public face of the synthetic renderer: options and their spec string, the scene
+// (trajectory, timestamps, rendering), TUM export and the FrameSource.
+#include "rgbdslam/io/synthetic_scene.h"
+
+#include <cassert>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "synthetic_world.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr int64_t kEpochUs = 1700000000LL * 1000000LL;  // time of frame 0 [us]
+constexpr double kRoomDefaultSeconds = 20.0;             // 600 frames at 30 Hz
+constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz, 110 m
+constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
+constexpr const char* kKnownKeys =
+    "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
+    "noise_sigma, depth_sigma, quantise";
+
+PinholeCamera syntheticCamera() {
+  PinholeCamera camera;
+  camera.name = "synthetic";
+  camera.width = 640, camera.height = 480;
+  camera.fx = 525.0, camera.fy = 525.0, camera.cx = 319.5, camera.cy = 239.5;
+  camera.depth_factor = 5000.0;
+  return camera;
+}
+
+std::string trim(const std::string& s) {
+  const size_t first = s.find_first_not_of(" \t");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+}
+
+bool parseDouble(const std::string& text, double* out) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  *out = std::strtod(text.c_str(), &end);
+  return end == text.c_str() + text.size() && std::isfinite(*out);
+}
+
+template <typename Int>
+bool parseInteger(const std::string& text, Int* out) {
+  const char* end = text.data() + text.size();
+  const auto result = std::from_chars(text.data(), end, *out);
+  return !text.empty() && result.ec == std::errc() && result.ptr == end;
+}
+
+std::string formatDouble(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+Status badValue(const std::string& key, const std::string& value, const char* expected) {
+  return Error{"bad value '" + value + "' for key '" + key + "' (expected " + expected + ")"};
+}
+
+// Applies one key=value of a spec; range checks are left to validateSyntheticOptions.
+Status applyKey(const std::string& key, const std::string& value, SyntheticOptions* o) {
+  KinectNoiseOptions& n = o->noise;
+  double number = 0;
+  const bool is_number = parseDouble(value, &number);
+  if (key == "seed") {
+    if (!parseInteger(value, &o->seed)) return badValue(key, value, "an unsigned integer");
+  } else if (key == "frames") {
+    if (!parseInteger(value, &o->num_frames)) return badValue(key, value, "an integer");
+  } else if (key == "depth_frames") {
+    if (!parseInteger(value, &n.depth_frames)) return badValue(key, value, "an integer");
+  } else if (key == "depth") {
+    if (value == "on") {
+      n.depth_enabled = true;
+    } else if (value == "off") {
+      n.depth_enabled = false;
+    } else if (value == "first") {
+      n.depth_enabled = true, n.depth_frames = 1;
+    } else {
+      return badValue(key, value, "on, off or first");
+    }
+  } else if (key == "quantise") {
+    if (value != "0" && value != "1") return badValue(key, value, "0 or 1");
+    n.quantise = value == "1";
+  } else if (key == "rate" || key == "depth_fraction" || key == "min_range" ||
+             key == "max_range" || key == "noise_sigma" || key == "depth_sigma") {
+    if (!is_number) return badValue(key, value, "a number");
+    double* target = key == "rate"             ? &o->rate_hz
+                     : key == "depth_fraction" ? &n.depth_fraction
+                     : key == "min_range"      ? &n.min_range_m
+                     : key == "max_range"      ? &n.max_range_m
+                     : key == "noise_sigma"    ? &n.image_noise_sigma
+                                               : &n.sigma_coefficient;
+    *target = number;
+  } else {
+    return Error{"unknown key '" + key + "' (known: " + kKnownKeys + ")"};
+  }
+  return {};
+}
+
+std::string stampSeconds(int64_t utime) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%lld.%06lld", static_cast<long long>(utime / 1000000),
+                static_cast<long long>(utime % 1000000));
+  return buffer;
+}
+
+Status writeImage(const std::string& path, const cv::Mat& image) {
+  try {
+    if (cv::imwrite(path, image)) return {};
+  } catch (const cv::Exception& e) {
+    return Error{path + ": cannot write image (" + e.msg + ")"};
+  }
+  return Error{path + ": cannot write image"};
+}
+
+class SyntheticSource : public FrameSource {
+ public:
+  explicit SyntheticSource(const SyntheticOptions& options) : scene_(options) {}
+  FrameResult next() override {
+    FrameResult result;
+    if (next_ >= scene_.numFrames()) return result;  // kEnd
+    result.status = FrameResult::Status::kFrame;
+    result.frame = scene_.render(next_++);
+    return result;
+  }
+  double nominalRateHz() const override { return scene_.options().rate_hz; }
+  std::optional<size_t> size() const override { return scene_.numFrames(); }
+  std::string describe() const override {
+    return "synthetic:" + formatSyntheticSpec(scene_.options()) + " (" +
+           std::to_string(scene_.numFrames()) + " frames)";
+  }
+
+ private:
+  SyntheticScene scene_;
+  size_t next_ = 0;
+};
+
+}  // namespace
+
+Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
+  const std::string where = "synthetic spec '" + spec + "': ";
+  SyntheticOptions options;
+  size_t start = 0;
+  for (bool first = true; start <= spec.size(); first = false) {
+    size_t comma = spec.find(',', start);
+    if (comma == std::string::npos) comma = spec.size();
+    const std::string item = trim(spec.substr(start, comma - start));
+    start = comma + 1;
+    if (first) {
+      if (item == "room") {
+        options.scene = SyntheticSceneKind::kRoom;
+      } else if (item == "corridor") {
+        options.scene = SyntheticSceneKind::kCorridor;
+      } else {
+        return Error{where + "unknown scene '" + item + "' (expected room or corridor)"};
+      }
+      continue;
+    }
+    const size_t equals = item.find('=');
+    if (equals == std::string::npos) return Error{where + "expected key=value, got '" + item + "'"};
+    const Status applied = applyKey(trim(item.substr(0, equals)), trim(item.substr(equals + 1)),
+                                    &options);
+    if (!applied) return Error{where + applied.error()};
+  }
+  const Status valid = validateSyntheticOptions(options);
+  if (!valid) return Error{where + valid.error()};
+  return options;
+}
+
+std::string formatSyntheticSpec(const SyntheticOptions& o) {
+  const SyntheticOptions d;
+  const KinectNoiseOptions& n = o.noise;
+  std::string spec = o.scene == SyntheticSceneKind::kRoom ? "room" : "corridor";
+  auto add = [&spec](const char* key, const std::string& value) {
+    spec += std::string(",") + key + "=" + value;
+  };
+  if (o.seed != d.seed) add("seed", std::to_string(o.seed));
+  if (o.num_frames != d.num_frames) add("frames", std::to_string(o.num_frames));
+  if (o.rate_hz != d.rate_hz) add("rate", formatDouble(o.rate_hz));
+  if (n.depth_fraction != d.noise.depth_fraction) {
+    add("depth_fraction", formatDouble(n.depth_fraction));
+  }
+  if (!n.depth_enabled) add("depth", "off");
+  if (n.depth_frames != d.noise.depth_frames) add("depth_frames", std::to_string(n.depth_frames));
+  if (n.min_range_m != d.noise.min_range_m) add("min_range", formatDouble(n.min_range_m));
+  if (n.max_range_m != d.noise.max_range_m) add("max_range", formatDouble(n.max_range_m));
+  if (n.image_noise_sigma != d.noise.image_noise_sigma) {
+    add("noise_sigma", formatDouble(n.image_noise_sigma));
+  }
+  if (n.sigma_coefficient != d.noise.sigma_coefficient) {
+    add("depth_sigma", formatDouble(n.sigma_coefficient));
+  }
+  if (n.quantise != d.noise.quantise) add("quantise", n.quantise ? "1" : "0");
+  return spec;
+}
+
+Status validateSyntheticOptions(const SyntheticOptions& o) {
+  const KinectNoiseOptions& n = o.noise;
+  if (o.num_frames < 0) return Error{"frames must be >= 0 (0: the scene's default)"};
+  if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz)) return Error{"rate must be > 0 Hz"};
+  if (!(n.depth_fraction > 0 && n.depth_fraction <= 1)) {
+    return Error{"depth_fraction must be in (0, 1], got " + formatDouble(n.depth_fraction)};
+  }
+  if (n.depth_frames < -1) return Error{"depth_frames must be >= -1 (-1: all frames)"};
+  if (!(n.min_range_m > 0)) return Error{"min_range must be > 0 m"};
+  if (!(n.max_range_m > n.min_range_m && n.max_range_m <= kMaxRangeLimitM)) {
+    return Error{"max_range must be in (min_range, 13] m, got " + formatDouble(n.max_range_m)};
+  }
+  if (!(n.image_noise_sigma >= 0 && n.image_noise_sigma <= 255)) {
+    return Error{"noise_sigma must be in [0, 255] grey levels"};
+  }
+  if (!(n.sigma_coefficient >= 0 && std::isfinite(n.sigma_coefficient))) {
+    return Error{"depth_sigma must be >= 0"};
+  }
+  if (!(n.disparity_focal_px > 0 && n.baseline_m > 0 && n.disparity_step_px > 0)) {
+    return Error{"disparity quantisation parameters must be > 0"};
+  }
+  return {};
+}
+
+SyntheticScene::SyntheticScene(const SyntheticOptions& options)
+    : options_(options), camera_(syntheticCamera()) {
+  assert(validateSyntheticOptions(options).ok());
+  const bool room = options.scene == SyntheticSceneKind::kRoom;
+  const double default_s = room ? kRoomDefaultSeconds : kCorridorDefaultSeconds;
+  num_frames_ = options.num_frames > 0
+                    ? static_cast<size_t>(options.num_frames)
+                    : static_cast<size_t>(std::lround(default_s * options.rate_hz));
+  num_frames_ = std::max<size_t>(num_frames_, 1);
+  const double duration_s = (num_frames_ - 1) / options.rate_hz;
+  world_ = std::make_shared<const synthetic::World>(
+      room ? synthetic::buildRoom(options.seed, duration_s)
+           : synthetic::buildCorridor(options.seed, duration_s));
+}
+
+SyntheticScene::~SyntheticScene() = default;
+
+int64_t SyntheticScene::frameUtime(size_t i) const {
+  return kEpochUs + std::llround(static_cast<double>(i) * 1e6 / options_.rate_hz);
+}
+
+SE3 SyntheticScene::groundTruthPose(size_t i) const {
+  return world_->trajectory.pose(static_cast<double>(i) / options_.rate_hz);
+}
+
+Trajectory SyntheticScene::groundTruth() const {
+  Trajectory trajectory;
+  trajectory.reserve(num_frames_);
+  for (size_t i = 0; i < num_frames_; ++i) {
+    trajectory.push_back(TimedPose{frameUtime(i) * 1e-6, groundTruthPose(i)});
+  }
+  return trajectory;
+}
+
+RgbdFrame SyntheticScene::render(size_t i) const { return renderPose(groundTruthPose(i), i); }
+
+RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {
+  synthetic::CleanFrame clean;
+  synthetic::castRays(*world_, camera_, T_w_c, &clean);
+  synthetic::addImageNoise(options_.noise, options_.seed, i, &clean.colour);
+  RgbdFrame frame;
+  frame.utime = frameUtime(i);
+  frame.seq = static_cast<int64_t>(i);
+  frame.colour = clean.colour;
+  frame.depth = synthetic::kinectDepth(options_.noise, options_.seed, i, clean.depth_m,
+                                       camera_.depth_factor);
+  frame.depth_scale = camera_.depth_factor;
+  frame.camera_name = camera_.name;
+  if (surfaces) *surfaces = clean.surfaces;
+  return frame;
+}
+
+Status SyntheticScene::writeTumDirectory(const std::string& dir) const {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(fs::path(dir) / "rgb", ec);
+  if (!ec) fs::create_directories(fs::path(dir) / "depth", ec);
+  if (ec) return Error{dir + ": cannot create directory (" + ec.message() + ")"};
+  std::ofstream rgb_list(dir + "/rgb.txt"), depth_list(dir + "/depth.txt");
+  if (!rgb_list || !depth_list) return Error{dir + ": cannot write rgb.txt / depth.txt"};
+  const std::string spec = formatSyntheticSpec(options_);
+  rgb_list << "# color images\n# file: 'synthetic:" << spec << "'\n# timestamp filename\n";
+  depth_list << "# depth maps\n# file: 'synthetic:" << spec << "'\n# timestamp filename\n";
+  for (size_t i = 0; i < num_frames_; ++i) {
+    const RgbdFrame frame = render(i);
+    const std::string stamp = stampSeconds(frame.utime);
+    const std::string rgb_name = "rgb/" + stamp + ".png", depth_name = "depth/" + stamp + ".png";
+    if (Status s = writeImage(dir + "/" + rgb_name, frame.colour); !s) return s;
+    if (Status s = writeImage(dir + "/" + depth_name, frame.depth); !s) return s;
+    rgb_list << stamp << ' ' << rgb_name << '\n';
+    depth_list << stamp << ' ' << depth_name << '\n';
+  }
+  if (!rgb_list || !depth_list) return Error{dir + ": write failed for rgb.txt / depth.txt"};
+  return writeTumTrajectory(dir + "/groundtruth.txt", groundTruth());
+}
+
+std::unique_ptr<FrameSource> makeSyntheticSource(const SyntheticOptions& options) {
+  return std::make_unique<SyntheticSource>(options);
+}
+
+}  // namespace rgbdslam
