@@ -46,7 +46,9 @@ class CommandLine {
 };
 
 // The LCM URL every process accepts. The default stays on this host (ttl=0).
-constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
+// recv_buf_size: room for a few 640x480 frames (about 1.2 MB each) in the socket buffer; the
+// kernel caps it at net.core.rmem_max.
+constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 void addLcmUrlOption(CommandLine& cli);
 
 }  // namespace rgbdslam

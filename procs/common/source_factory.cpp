@@ -59,4 +59,19 @@ Expected<PinholeCamera> syntheticCamera(const std::string& text) {
   return SyntheticScene(*options).camera();
 }
 
+std::optional<Trajectory> groundTruthFor(const std::string& text) {
+  auto spec = parseSourceSpec(text);
+  if (!spec) return std::nullopt;
+  if (spec->kind == "synth") {
+    auto options = parseSyntheticSpec(spec->argument);
+    if (!options) return std::nullopt;
+    return SyntheticScene(*options).groundTruth();
+  }
+  if (spec->kind == "tum") {
+    auto trajectory = readTumTrajectory(spec->argument + "/groundtruth.txt");
+    if (trajectory) return *trajectory;
+  }
+  return std::nullopt;
+}
+
 }  // namespace rgbdslam

@@ -10,6 +10,7 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/io/frame_source.h"
+#include "rgbdslam/io/trajectory_io.h"
 #include "rgbdslam/util/expected.h"
 
 namespace rgbdslam {
@@ -26,5 +27,9 @@ Expected<std::unique_ptr<FrameSource>> openSource(const std::string& text,
 
 // The camera a synthetic source renders with (for processes that need one without a file).
 Expected<PinholeCamera> syntheticCamera(const std::string& text);
+
+// Ground truth that comes with a source: DIR/groundtruth.txt for tum:, the rendered
+// trajectory for synth:; nullopt when there is none (openni2:, lcmlog:).
+std::optional<Trajectory> groundTruthFor(const std::string& text);
 
 }  // namespace rgbdslam
