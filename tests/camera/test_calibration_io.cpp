@@ -16,18 +16,17 @@ std::string writeFile(const test::TempDir& dir, const std::string& name, const s
 }
 
 TEST(CalibrationIo, LoadsTheShippedCameras) {
-  const char* source = std::getenv("RGBDSLAM_SOURCE_DIR");
-  ASSERT_NE(source, nullptr);
+  const std::string source = test::sourceDir();
   for (const char* name : {"tum_fr1", "tum_fr2", "tum_fr3", "kinect_default"}) {
-    auto camera = loadCamera(std::string(source) + "/config/cameras/" + name + ".yaml");
+    auto camera = loadCamera(source + "/config/cameras/" + name + ".yaml");
     ASSERT_TRUE(camera) << camera.error();
     EXPECT_EQ(camera->name, name);
     EXPECT_EQ(camera->width, 640);
   }
-  auto fr3 = loadCamera(std::string(source) + "/config/cameras/tum_fr3.yaml");
+  auto fr3 = loadCamera(source + "/config/cameras/tum_fr3.yaml");
   EXPECT_DOUBLE_EQ(fr3->fx, 535.4);
   EXPECT_DOUBLE_EQ(fr3->depth_factor, 5000.0);
-  auto fr1 = loadCamera(std::string(source) + "/config/cameras/tum_fr1.yaml");
+  auto fr1 = loadCamera(source + "/config/cameras/tum_fr1.yaml");
   EXPECT_DOUBLE_EQ(fr1->k3, 1.1633);
 }
 

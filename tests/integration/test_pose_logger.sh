@@ -25,7 +25,8 @@ logger=\$!
 sleep 0.5
 '$TOOLS/send-messages' --poses 2000 --rate 2000 --lcm-url '$LCM_URL' &
 sender=\$!
-sleep 0.4
+# Kill it mid-stream: once it has written some lines, while the sender is still going.
+for i in \$(seq 200); do [ \$(wc -l < killed.txt) -ge 20 ] && break; sleep 0.05; done
 kill -KILL \$logger
 wait \$sender || true
 wait \$logger || true

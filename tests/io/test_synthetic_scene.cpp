@@ -38,11 +38,6 @@ bool identical(const cv::Mat& a, const cv::Mat& b) {
   return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
 }
 
-std::string sourceDir() {
-  if (const char* dir = std::getenv("RGBDSLAM_SOURCE_DIR")) return dir;
-  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string();
-}
-
 // FAST-9 (the segment test of Rosten & Drummond, as cv::FAST with TYPE_9_16 and non-maximum
 // suppression): lib_tests links only OpenCV core/imgproc/imgcodecs, not features2d.
 const int kCircle[16][2] = {{0, -3}, {1, -3}, {2, -2}, {3, -1}, {3, 0},  {3, 1},
@@ -168,7 +163,7 @@ TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
 // ---- camera, time, trajectory
 
 TEST(SyntheticScene, CameraMatchesConfigFile) {
-  const std::string path = sourceDir() + "/config/cameras/synthetic.yaml";
+  const std::string path = test::sourceDir() + "/config/cameras/synthetic.yaml";
   const auto loaded = loadCamera(path);
   ASSERT_TRUE(loaded.ok()) << loaded.error();
   const SyntheticScene scene(parsed("room,frames=1"));

@@ -11,9 +11,14 @@ bool isCi() {
   return ci && std::string(ci) == "true";
 }
 
+std::string sourceDir() {
+  const char* source = std::getenv("RGBDSLAM_SOURCE_DIR");
+  return source ? source : RGBDSLAM_TEST_SOURCE_DIR;
+}
+
 std::string sharedDataPath(const std::string& name) {
   const char* shared = std::getenv("RGBDSLAM_SHARED_DIR");
-  const std::string base = shared ? shared : "../shared";
+  const std::string base = shared ? shared : RGBDSLAM_TEST_SHARED_DIR;
   const std::string path = base + "/data/" + name;
   return std::filesystem::exists(path) ? path : std::string();
 }

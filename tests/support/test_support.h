@@ -8,6 +8,8 @@ namespace rgbdslam::test {
 // elsewhere it is skipped with a message. Use through RGBDSLAM_REQUIRE_SHARED_DATA.
 std::string sharedDataPath(const std::string& name);
 bool isCi();
+// The repository's root (for config/ files).
+std::string sourceDir();
 // A new empty folder under the system temp dir, removed by the destructor.
 class TempDir {
  public:
