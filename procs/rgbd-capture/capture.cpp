@@ -38,6 +38,7 @@ Expected<CaptureOptions> CaptureOptions::fromCommandLine(const CommandLine& cli)
   if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
   o.max_frames = *max_frames;
   o.lcm_url = cli.get("lcm-url");
+  o.groundtruth_out = cli.get("groundtruth-out");
   return o;
 }
 
@@ -64,6 +65,11 @@ Expected<std::unique_ptr<Capture>> Capture::create(const CaptureOptions& options
   if (!source) return Error{source.error()};
   auto lcm = openLcm(options.lcm_url);
   if (!lcm) return Error{lcm.error()};
+  if (!options.groundtruth_out.empty()) {
+    const std::optional<Trajectory> groundtruth = groundTruthFor(options.source);
+    if (!groundtruth) return Error{"--groundtruth-out: " + options.source + " has no ground truth"};
+    if (Status s = writeTumTrajectory(options.groundtruth_out, *groundtruth); !s) return Error{s.error()};
+  }
   return std::unique_ptr<Capture>(
       new Capture(options, camera, std::move(*source), std::move(*lcm)));
 }

@@ -23,6 +23,7 @@ struct CaptureOptions {
   std::string channel = "RGBD_FRAME";
   FrameEncoding encoding;
   long max_frames = 0;                // 0 = all
+  std::string groundtruth_out;        // where to write the source's ground truth; empty = nowhere
   std::string lcm_url;
 
   static Expected<CaptureOptions> fromCommandLine(const CommandLine& cli);

@@ -22,6 +22,7 @@ CommandLine makeCommandLine() {
   cli.option("jpeg-quality", "Q", "JPEG quality [1-100] when --colour jpeg", "90");
   cli.option("depth", "raw|zlib", "depth encoding on the wire (both lossless)", "zlib");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
+  cli.option("groundtruth-out", "FILE", "write the source's ground truth (synth:, tum:) to FILE in TUM format");
   cli.flag("list-devices", "list attached Kinect/PrimeSense USB devices and OpenNI2 devices, then exit");
   addLcmUrlOption(cli);
   return cli;

@@ -1,0 +1,101 @@
+#pragma once
+// The keyframe map of PTAM: keyframes (pose, image pyramid, FAST corners, depth, small
+// blurry image, the measurements made in them) and map points (world position and the
+// patch that describes them: source keyframe, level and pixel).
+//
+// Ownership: the mapper owns the authoritative map; the tracker keeps a replica that it
+// extends with provisional keyframes and points and updates from MapUpdate messages. Both
+// are instances of this class; it has no locks (one thread owns each instance).
+// Frames: T_w_c maps camera to world; p_w world coordinates [m]; pixels at level 0.
+#include <map>
+#include <memory>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/image/corners.h"
+#include "rgbdslam/image/pyramid.h"
+#include "rgbdslam/image/small_blurry_image.h"
+#include "rgbdslam/map/map_types.h"
+
+namespace rgbdslam {
+
+struct Keyframe {
+  KeyframeId id = -1;
+  int64_t utime = 0;        // acquisition time [us]
+  SE3 T_w_c;
+  cv::Mat raw_depth;        // CV_16UC1 raw units as received (0 = none), or empty
+  double depth_scale = 5000.0;  // raw units per metre
+  cv::Mat depth;            // CV_32FC1 [m], NaN where there is no reading, or empty
+  ImagePyramid pyramid;     // grey, kMaxLevels levels
+  std::vector<LevelCorners> corners;  // FAST corners per level
+  SmallBlurryImage sbi;     // for relocalisation
+  std::unordered_map<PointId, Measurement> measurements;  // points seen in this keyframe
+  double median_depth = 2.0;  // median depth of the points it measures [m]
+
+  SE3 T_c_w() const { return T_w_c.inverse(); }
+  const cv::Mat& grey() const { return pyramid.levels[0]; }
+  // Depth [m] at a level-0 pixel (nearest pixel); nullopt when there is no valid reading.
+  std::optional<double> depthAt(const Eigen::Vector2d& uv) const;
+};
+
+struct MapPoint {
+  PointId id = -1;
+  Vec3 p_w = Vec3::Zero();
+  KeyframeId source_keyframe = -1;  // keyframe whose image holds the point's patch
+  int source_level = 0;             // pyramid level of the patch
+  Eigen::Vector2d source_uv = Eigen::Vector2d::Zero();  // patch centre, level 0 [px]
+  int times_projected = 0;  // tracker: frames in which it was predicted visible and searched
+  int times_found = 0;      // tracker: frames in which it was found
+
+  MapPointData data() const { return {id, p_w, source_keyframe, source_uv, source_level}; }
+};
+
+// Options for building a keyframe's image structures.
+struct KeyframeBuildOptions {
+  CornerOptions corners;
+  double min_depth_m = 0.3;  // readings nearer than this are treated as invalid [m]
+  double max_depth_m = 8.0;  // readings farther than this are treated as invalid [m]
+};
+
+// Builds pyramid, corners, SBI and metric depth from a keyframe message's content.
+std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeBuildOptions& options);
+// Converts raw depth to metres with NaN for invalid readings (0, out of range).
+cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m);
+
+class Map {
+ public:
+  Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe);
+  Keyframe* keyframe(KeyframeId id);
+  const Keyframe* keyframe(KeyframeId id) const;
+  bool hasKeyframe(KeyframeId id) const { return keyframes_.count(id) > 0; }
+  const std::map<KeyframeId, std::unique_ptr<Keyframe>>& keyframes() const { return keyframes_; }
+  size_t numKeyframes() const { return keyframes_.size(); }
+
+  // Adds or replaces a point (keeps tracker statistics when replacing).
+  MapPoint* addPoint(const MapPoint& point);
+  MapPoint* point(PointId id);
+  const MapPoint* point(PointId id) const;
+  // Removes the point and every measurement of it.
+  void removePoint(PointId id);
+  const std::unordered_map<PointId, MapPoint>& points() const { return points_; }
+  size_t numPoints() const { return points_.size(); }
+
+  // Adds a measurement of an existing point to an existing keyframe.
+  void addMeasurement(KeyframeId keyframe_id, const Measurement& measurement);
+  // Keyframes that measure the point.
+  std::vector<KeyframeId> observers(PointId id) const;
+
+  // The n keyframes nearest to a pose: by camera-centre distance plus a penalty for viewing
+  // direction (metres per radian, PTAM-like), nearest first.
+  std::vector<KeyframeId> nearestKeyframes(const SE3& T_w_c, size_t n,
+                                           double metres_per_radian = 0.5) const;
+
+ private:
+  std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
+  std::unordered_map<PointId, MapPoint> points_;
+  std::unordered_map<PointId, std::vector<KeyframeId>> observers_;
+};
+
+}  // namespace rgbdslam

@@ -1,0 +1,56 @@
+#pragma once
+// New map points by epipolar search (PTAM's AddSomeMapPoints; paper III-C): for corners of
+// a new keyframe that have no depth reading (every corner in mono mode), search the 8x8
+// patch along the epipolar segment of the plausible depth range in another keyframe (the
+// nearest one) among that keyframe's FAST corners of the same pyramid level, refine the best
+// ZMSSD match to sub-pixel accuracy and triangulate the two rays (midpoint).
+//
+// Call order: epipolarSearch(new_kf, nearest_kf, ...) after the new keyframe's own
+// measurements are in it (corners near them are skipped); the caller adds the returned
+// points and both measurements (depth 0: the caller fills depth where it is allowed).
+// Frames and units: T_w_c camera to world; pixels at level 0 unless named *_level; metres.
+#include <optional>
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/map/map.h"
+
+namespace rgbdslam {
+
+struct EpipolarOptions {
+  double min_depth_m = 0.3;           // search range along the ray of the new keyframe [m]
+  double max_depth_m = 8.0;           // [m]
+  int max_points = 300;               // corners tried (strongest Shi-Tomasi first)
+  double min_shi_tomasi = 30.0;       // weaker corners are not tried [(grey/px)^2]
+  double min_separation_px = 8.0;     // from measured points and each other, level 0 [px]
+  double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
+  double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]
+  int max_zmssd = 400 * 64;           // accepted patch difference [grey^2 over 64 px]
+  double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
+  double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
+  bool skip_corners_with_depth = true;  // only corners without a depth reading (depth modes)
+};
+
+struct EpipolarPoint {
+  MapPoint point;          // id, p_w, source = the new keyframe, its level and pixel
+  Measurement in_keyframe; // in the new keyframe (depth 0)
+  Measurement in_other;    // in the other keyframe (depth 0)
+};
+
+struct EpipolarStats {
+  int tried = 0, no_candidate = 0, no_match = 0, ambiguous = 0, subpixel_failed = 0,
+      bad_triangulation = 0, created = 0;
+};
+
+// Points ids are first_id + i. 'stats' (optional) receives the counts per outcome.
+std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyframe& other,
+                                          const PinholeCamera& camera, const EpipolarOptions& options,
+                                          PointId first_id, EpipolarStats* stats = nullptr);
+
+// Midpoint of the shortest segment between two rays (origins o_a, o_b and unit directions
+// d_a, d_b in the world). nullopt when the rays are (nearly) parallel or the point lies
+// behind either origin.
+std::optional<Vec3> triangulateMidpoint(const Vec3& o_a, const Vec3& d_a, const Vec3& o_b,
+                                        const Vec3& d_b);
+
+}  // namespace rgbdslam

@@ -1,0 +1,108 @@
+#pragma once
+// PTAM's mapper with depth (paper II-B, III-C, IV). It owns the authoritative map.
+//   addKeyframe(kf): integrate keyframes in id order, starting at id 0 (earlier duplicates
+//   are acknowledged again, gaps wait, keyframes of another map_id are refused): add the
+//   keyframe, its measurements of existing points and its provisional points from depth
+//   (measurements of unknown points are dropped and counted); for corners without depth
+//   (every corner in mono mode) add points by epipolar search against the nearest keyframe
+//   (epipolar_search.h); run local bundle adjustment (the new keyframe and its nearest
+//   neighbours free, the other keyframes that see their points fixed, keyframe 0 always
+//   fixed). Returns the map delta (with the acknowledgement) to publish.
+//   refine(interrupt): the background work, one PTAM loop pass per call: re-find the newest
+//   points in the other keyframes (data_association.h), global bundle adjustment (all but
+//   keyframe 0; only the newest max_global_ba_keyframes free), then cull 2-D outlier
+//   measurements and points with too few good ones (map_maintenance.h). Returns a delta when
+//   the map changed, nullopt when there is nothing left to do (converged). Interrupted
+//   (returns early, keeping what was done) when *interrupt becomes true, i.e. a new
+//   keyframe arrived.
+//   snapshot(): the whole map as a full update (version unchanged).
+// Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
+// the next culling; a depth reading judged an outlier is dropped at once (depth set to 0),
+// keeping the 2-D measurement.
+// Gauge: keyframe 0 is always fixed. In the 2-D modes (mono, depth-init) the BA cost does
+// not see the scale, so keyframe 0's points (the map initialisation from measured depth)
+// are held fixed and keep it (fixing a second, tracked keyframe instead would pin its
+// tracking error into the whole map).
+// Point ids: provisional points from the tracker use keyframe_id * kPointsPerKeyframe + i
+// (i < kPointsPerKeyframe / 2); points the mapper creates for keyframe k use the upper half
+// of k's block, so both sides name points alike without talking.
+// Determinism: no randomness; everything iterates in id order, so equal inputs give equal
+// maps. MapUpdate::utime is the utime of the newest integrated keyframe.
+// Threads: not thread-safe; one thread calls everything (interrupt may be set by another).
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/map/map.h"
+#include "rgbdslam/mapping/bundle_adjuster.h"
+#include "rgbdslam/mapping/slam_mode.h"
+#include "rgbdslam/util/option_registry.h"
+
+namespace rgbdslam {
+
+struct MapperOptions {
+  // Bundle adjustment windows
+  int local_ba_neighbours = 4;          // nearest keyframes optimised with the new one
+  int global_ba_every = 1;              // run global BA after this many new keyframes
+  int max_global_ba_keyframes = 200;    // above this, global BA optimises only the newest ones
+  // Epipolar search (points where there is no depth)
+  double epipolar_min_depth_m = 0.3;    // search range along the epipolar line [m]
+  double epipolar_max_depth_m = 8.0;    // [m]
+  int epipolar_max_points = 300;        // corners without depth tried per new keyframe
+  double epipolar_min_shi_tomasi = 30.0;  // weaker corners are not tried [(grey/px)^2]
+  double epipolar_min_separation_px = 8.0;  // from points the keyframe measures, level 0 [px]
+  double epipolar_line_tolerance_px = 1.5;  // corner distance from the epipolar segment [level px]
+  double epipolar_distinctiveness = 0.8;    // best ZMSSD must be below this times the
+                                            // second best (a corner > 2 px away) [-]
+  double epipolar_min_parallax_deg = 1.0;   // smaller ray angles do not triangulate [deg]
+  double epipolar_max_reprojection_px = 2.0;  // triangulated point's error in either view [level px]
+  // Patch matching (epipolar search and re-finding)
+  int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
+  int refind_search_radius_px = 5;      // re-finding: search radius around the prediction [level px]
+  // Culling
+  int min_good_measurements = 2;        // points with fewer good measurements are culled (not source-only)
+  int keep_source_only_keyframes = 3;   // points seen only in their source keyframe survive
+                                        // while it is among this many newest keyframes
+  double max_outlier_fraction = 0.5;    // points whose measurements are mostly outliers are culled
+  BaOptions ba;
+  KeyframeBuildOptions keyframe_build;
+
+  void bind(OptionRegistry* registry);  // section "mapper" (and "bundle_adjustment")
+};
+
+struct MapperResult {
+  enum class Status {
+    kIntegrated,   // the keyframe is in the map; update is the delta (version + 1)
+    kDuplicate,    // already integrated: update re-acknowledges (version unchanged, no content)
+    kOutOfOrder,   // an earlier keyframe is missing: re-send later (update as for kDuplicate)
+    kForeignMap,   // another map_id than the first keyframe's: refused (error says which)
+    kBadKeyframe,  // unusable content (no image, wrong size): refused (error says why)
+  };
+  Status status = Status::kBadKeyframe;
+  MapUpdate update;   // the delta to publish (acknowledges every keyframe integrated so far)
+  std::string error;
+  int dropped_measurements = 0;  // measurements of points the map does not know
+  int epipolar_points = 0;       // points added by epipolar search
+  double integrate_ms = 0.0, local_ba_ms = 0.0;
+};
+
+const char* toString(MapperResult::Status status);
+
+class Mapper {
+ public:
+  Mapper(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode);
+  ~Mapper();
+  MapperResult addKeyframe(const KeyframeData& keyframe, const std::atomic<bool>* interrupt = nullptr);
+  std::optional<MapUpdate> refine(const std::atomic<bool>* interrupt = nullptr);
+  MapUpdate snapshot() const;           // the whole map as a full snapshot
+  const Map& map() const;
+  int64_t version() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rgbdslam

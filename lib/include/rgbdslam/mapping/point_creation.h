@@ -1,0 +1,31 @@
+#pragma once
+// New map points from measured depth (paper III-B, III-C): at the FAST corners of every
+// pyramid level that survive non-maximum suppression and have a valid depth reading, a
+// point p_w = T_w_c * unproject(uv, d). Used for the initial map (keyframe 0) and, by the
+// tracker, for the provisional points of each new keyframe. Corners close to a point the
+// keyframe already measures are skipped, so a keyframe does not duplicate what it tracks.
+// Ids: first_id + i, where the caller passes keyframe_id * kPointsPerKeyframe.
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/map/map.h"
+
+namespace rgbdslam {
+
+struct DepthPointOptions {
+  int max_points_per_level = 300;     // strongest corners kept per level (by Shi-Tomasi score)
+  double min_shi_tomasi = 30.0;       // weaker corners are not used: smallest eigenvalue of the mean structure tensor [(grey/px)^2]
+  double min_separation_px = 8.0;     // from already-measured points and each other, level 0 [px]
+  int patch_border_px = 6;            // corners this close to the level's border are skipped [px]
+  double depth_discontinuity = 0.05;  // max relative depth spread in the 3x3 window (edges are skipped)
+};
+
+struct NewPoint {
+  MapPoint point;
+  Measurement measurement;  // its observation in the source keyframe (with depth)
+};
+
+std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
+                                            const DepthPointOptions& options, PointId first_id);
+
+}  // namespace rgbdslam

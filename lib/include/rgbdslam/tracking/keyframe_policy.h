@@ -1,0 +1,32 @@
+#pragma once
+// PTAM's keyframe decision. Why: a new keyframe is worth its cost (mapping, bundle
+// adjustment) only when tracking is good, some frames have passed since the last one, and
+// the camera sees the scene from a place no keyframe covers: every keyframe is either
+// farther than a fraction of the scene depth or rotated by more than an angle.
+// Call order: after the pose of a frame is final; shouldAddKeyframe(...).
+// Frames and units: T_w_c camera to world [m]; angles in degrees.
+#include <vector>
+
+#include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/map/map.h"
+
+namespace rgbdslam {
+
+struct KeyframePolicyOptions {
+  int min_frames_between_keyframes = 10;  // frames since the last keyframe
+  double distance_ratio = 0.1;            // distance / median scene depth to count as "far"
+  double angle_deg = 15.0;                // rotation to count as "turned" [deg]
+};
+
+struct KeyframePolicyInput {
+  bool tracking_good = false;       // state tracking (not dodgy, not lost)
+  int frames_since_keyframe = 0;    // frames tracked since the last keyframe was added
+  double median_depth_m = 0.0;      // median depth of the points found in this frame [m]
+  SE3 T_w_c;                        // this frame's pose
+};
+
+// True if no keyframe is both within distance_ratio * median depth and within angle_deg.
+bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
+                       const KeyframePolicyOptions& options);
+
+}  // namespace rgbdslam

@@ -1,0 +1,96 @@
+#pragma once
+// Which map points the current frame may see, where, at which pyramid level, and how their
+// source patches look from here (PTAM's tracker steps 2-3). Why: the patch search needs,
+// for every visible point, its predicted pixel, the affine warp A_cur_src from its source
+// keyframe and the search level chosen from that warp; the warped 8x8 patch is cached per
+// point and re-warped only when the warp has changed noticeably (it changes slowly).
+//
+// Call order: the tracker keeps one PointSlot per map point (added / refreshed /
+// removed as the replica changes); per frame, makeKeyframeViews(map, T_c_w) once, then
+// projectPoint() for each slot, then ensurePatch() for each slot that will be searched.
+//
+// Frames and units: T_c_w maps world to the current camera; pixels at level 0 unless named
+// *_level; A_cur_src maps a level-0 pixel offset in the source keyframe to a level-0 pixel
+// offset in the current image (patch.h).
+#include <Eigen/Core>
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/image/patch.h"
+#include "rgbdslam/map/map.h"
+
+namespace rgbdslam {
+
+// Per-frame data of one keyframe: the rotation from its camera to the current camera and
+// the third row of its T_c_w (for the point's depth in the source camera).
+struct KeyframeView {
+  bool valid = false;
+  Mat3 R_cur_src = Mat3::Identity();
+  Eigen::RowVector3d src_z_row = Eigen::RowVector3d::Zero();  // z_src = row . p_w + t_z
+  double src_z_offset = 0.0;
+};
+
+// Indexed by keyframe id (ids are dense from 0).
+void makeKeyframeViews(const Map& map, const SE3& T_c_w, std::vector<KeyframeView>* views);
+
+struct PointSlot {
+  MapPoint* point = nullptr;         // in the replica (stable until the point is removed)
+  const Keyframe* source = nullptr;  // the point's source keyframe
+  // d(normalised coordinates)/d(pixel) at the point's source pixel: the unprojection
+  // Jacobian of the source camera (1/f on the diagonal without distortion).
+  Eigen::Matrix2d d_m_d_uvsrc = Eigen::Matrix2d::Identity();
+  // Patch cache: the warped patch, the warp and level it was made for (level -1: none).
+  Patch patch;
+  Eigen::Matrix2d patch_A = Eigen::Matrix2d::Zero();
+  int patch_level = -1;
+  // Per frame, from projectPoint().
+  Vec3 p_c = Vec3::Zero();
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // predicted pixel, level 0
+  Eigen::Matrix2d A_cur_src = Eigen::Matrix2d::Identity();
+  int search_level = -1;
+  // Per frame, from the search.
+  bool searched = false;
+  bool found = false;
+  Eigen::Vector2d found_uv = Eigen::Vector2d::Zero();  // level 0
+  int found_level = 0;
+};
+
+// Fills the slot's point, source and unprojection Jacobian, and drops its patch cache.
+// False if the source keyframe is not in the map.
+bool initSlot(const Map& map, const PinholeCamera& camera, MapPoint* point, PointSlot* slot);
+
+struct ProjectionOptions {
+  int margin_px = 8;              // inside the image by this much [px]
+  double min_depth_m = 0.05;      // in front of the camera by this much [m]
+};
+
+// p_c, uv, A_cur_src and search_level of the slot at pose T_c_w. False when the point is
+// behind the camera, outside the image (with margin), its source view is unknown or the
+// warp is degenerate (chooseSearchLevel < 0).
+bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
+                  const std::vector<KeyframeView>& views, const ProjectionOptions& options,
+                  PointSlot* slot);
+
+// Makes slot->patch the source patch warped by slot->A_cur_src at slot->search_level,
+// reusing the cached one when the level is the same and no entry of A changed by more
+// than 'tolerance'. False when the warp leaves the source image.
+bool ensurePatch(PointSlot* slot, double tolerance);
+
+}  // namespace rgbdslam
+
+namespace rgbdslam {
+
+struct PointSearchOptions {
+  int radius_px = 4;                    // search radius at the search level [px]
+  int max_zmssd = 400 * kPatchArea;     // ZMSSD acceptance [grey^2 over the patch]
+  double patch_cache_tolerance = 0.05;  // see ensurePatch()
+  SubpixelOptions subpixel;
+};
+
+// Searches each slot's (warped) patch among the FAST corners of its search level around its
+// predicted pixel and refines the best match to sub-pixel. Sets searched (the patch could
+// be made), found, found_uv (level 0) and found_level. Returns the number found.
+int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
+                 const std::vector<LevelCorners>& corners, const PointSearchOptions& options);
+
+}  // namespace rgbdslam

@@ -1,0 +1,62 @@
+#pragma once
+// Camera pose from 2-D (and optionally depth) measurements of known map points: PTAM's
+// tracker pose update, iteratively re-weighted Gauss-Newton with Tukey's biweight. Why: the
+// patch search yields some wrong matches; Tukey gives them zero weight, with the scale
+// re-estimated from the median error at every iteration (PTAM), so the fit is not dragged
+// by them. Depth residuals (paper sec. IV-E) use their own robust scale, so a bad depth
+// reading does not discard the good 2-D measurement of the same point.
+//
+// Call order: fill PoseObservations, optimisePose(camera, T_c_w_start, observations, options).
+// Frames and units: T_c_w maps world to camera (the residuals' convention, ba_residuals.h),
+// updated by the left perturbation T_c_w <- exp(xi) T_c_w. Pixels at level 0, depth in m.
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/geometry/se3.h"
+
+namespace rgbdslam {
+
+struct PoseObservation {
+  Vec3 p_w = Vec3::Zero();                       // map point [m]
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // measured pixel, level 0 [px]
+  int level = 0;                                 // pyramid level found at (sigma2d(level))
+  double depth = 0.0;                            // measured depth [m]; 0 = none
+};
+
+struct PoseOptimizerOptions {
+  int iterations = 10;                        // Gauss-Newton iterations at most
+  double tukey_c = 4.6851;                    // cut-off in robust sigmas
+  double min_robust_sigma = 0.4;              // floor of the robust scale [measurement sigmas]
+  bool use_depth = true;                      // add the depth residuals
+  double depth_sigma_coefficient = 3.331e-3;  // a in sigma_d = a d^2 [1/m]
+  double converged_step = 1e-7;               // stop when |xi| is below this
+};
+
+struct PoseOptimizerResult {
+  SE3 T_c_w;
+  bool ok = false;        // false: too few usable observations or a singular system
+  int inliers_2d = 0;     // 2-D residuals with a non-zero final weight
+  int inliers_depth = 0;  // depth residuals with a non-zero final weight
+  int iterations = 0;     // iterations run
+};
+
+// Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / (a d^2)) over T_c_w.
+// inlier (optional) receives one flag per observation: its 2-D residual kept a weight.
+PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
+                                 const std::vector<PoseObservation>& observations,
+                                 const PoseOptimizerOptions& options,
+                                 std::vector<uint8_t>* inlier = nullptr);
+
+// Tukey's biweight for a squared normalised error e2 and squared cut-off c2:
+// (1 - e2 / c2)^2 inside the cut-off, 0 outside.
+inline double tukeyWeight(double e2, double c2) {
+  if (e2 >= c2) return 0.0;
+  const double t = 1.0 - e2 / c2;
+  return t * t;
+}
+
+// Robust squared scale of squared normalised errors: max(floor^2, 1.4826^2 median(e2)).
+// 'e2' is reordered.
+double robustSigmaSquared(std::vector<double>* e2, double floor_sigma);
+
+}  // namespace rgbdslam

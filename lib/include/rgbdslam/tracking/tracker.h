@@ -1,0 +1,110 @@
+#pragma once
+// PTAM's tracker with depth (paper II-A, III). One call per frame:
+//   track(frame): build pyramid, corners and small blurry image; on the first frame create
+//   the initial map from depth (keyframe 0); otherwise predict the pose (damped constant
+//   velocity, rotation pre-estimate from small blurry images), project the visible map
+//   points, warp their patches, search among FAST corners by ZMSSD, refine to sub-pixel,
+//   and update the pose by Gauss-Newton with Tukey weights (coarse stage: few points at high
+//   levels with a wide search; fine stage: many points). Tracking quality (fraction found)
+//   gives tracking / dodgy / lost; when lost, the relocaliser compares the small blurry image
+//   with every keyframe's and tries the best. Finally the keyframe decision; a new keyframe
+//   gets provisional points from measured depth at once and is returned for the mapper.
+//   applyMapUpdate(update): the mapper's newer map versions replace the replica's poses and
+//   points; older or foreign versions are ignored (the return value says why).
+// Frames: T_w_c camera to world; pixels at level 0; depth in metres.
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/image/rgbd_frame.h"
+#include "rgbdslam/map/map.h"
+#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/mapping/slam_mode.h"
+#include "rgbdslam/tracking/pose_estimate.h"
+#include "rgbdslam/util/option_registry.h"
+
+namespace rgbdslam {
+
+struct TrackerOptions {
+  // Motion model
+  double velocity_damping = 0.9;        // fraction of last frame's velocity kept [0, 1]
+  bool use_sbi_rotation = true;         // rotation pre-estimate from small blurry images
+  // Point search
+  int coarse_max_points = 60;           // points searched in the coarse stage
+  int coarse_min_level = 2;             // coarse stage uses points found at this level or above
+  int coarse_radius_px = 10;            // coarse search radius at the search level [px]
+  int fine_max_points = 1000;           // points searched in the fine stage
+  int fine_radius_px = 4;               // fine search radius at the search level [px]
+  int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
+  int coarse_min_points = 10;           // fewer coarse candidates: skip the coarse stage
+  int image_margin_px = 8;              // projected points this close to the border are skipped [px]
+  double patch_cache_tolerance = 0.05;  // re-warp a cached patch when an entry of A changes more
+  int gauss_newton_iterations = 10;     // pose iterations per stage
+  double tukey_c = 4.6851;              // Tukey cut-off in robust sigmas
+  double min_robust_sigma = 0.4;        // floor of the robust sigma [measurement sigmas]
+  bool use_depth_in_pose = true;        // add depth residuals of tracked corners to the pose
+  double depth_sigma_coefficient = 3.331e-3;  // a in sigma_d = a d^2 for depth residuals [1/m]
+  int random_seed = 1;                  // seed of the point subset selection (deterministic)
+  // Quality
+  double quality_good = 0.3;            // found / searched at least this: tracking
+  double quality_lost = 0.13;           // below this: lost (between: dodgy)
+  int min_points_tracked = 20;          // fewer found points: lost whatever the ratio
+  // A point searched at least this often and found in less than unreliable_found_ratio of
+  // those frames is unreliable (fur, thin structures, wrong depth): still searched, but it
+  // does not count in the quality, which should measure the view, not the map's bad points.
+  int unreliable_after_searches = 10;   // [frames]
+  double unreliable_found_ratio = 0.3;  // found / searched
+  // Initialisation and relocalisation
+  int init_min_points = 50;             // keyframe 0 needs this many points from depth
+  int relocalise_candidates = 2;        // best keyframes (by small-blurry-image ZMSSD) tried
+  // Keyframes
+  int min_frames_between_keyframes = 10;      // frames since the last keyframe
+  double keyframe_distance_ratio = 0.1;       // min distance to nearest keyframe / median scene depth
+  double keyframe_angle_deg = 15.0;           // or this much rotation from the nearest keyframe [deg]
+  // Keyframe images and provisional points
+  KeyframeBuildOptions keyframe_build;
+  DepthPointOptions depth_points;
+
+  void bind(OptionRegistry* registry);  // section "tracker"
+};
+
+struct TrackResult {
+  enum class Status {
+    kInitialised,   // this frame became keyframe 0 of a new map
+    kTracked,       // pose found (state tracking or dodgy)
+    kLost,          // no pose; relocalising
+    kRelocalised,   // recovered from loss with this frame
+    kBadFrame,      // unusable input (no colour, wrong size, no depth for initialisation)
+  };
+  Status status = Status::kBadFrame;
+  PoseEstimate pose;
+  std::optional<KeyframeData> new_keyframe;  // for the mapper, with provisional points
+  std::string error;                         // for kBadFrame
+  double track_ms = 0.0;                     // time spent in track() [ms]
+};
+
+class Tracker {
+ public:
+  Tracker(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id);
+  ~Tracker();
+  TrackResult track(const RgbdFrame& frame);
+
+  // kApplied: applied. kStale: version <= mapVersion(), ignored. kForeignMap: another
+  // map_id, ignored. kUnknownKeyframe: applied, but it named keyframes (poses or point
+  // sources) the replica does not have; those entries were skipped. kMissingDelta: a delta
+  // whose version is not mapVersion() + 1 (an update in between was lost); ignored, because
+  // applying it would leave the replica a mix of versions -- the next snapshot repairs it.
+  enum class UpdateStatus { kApplied, kStale, kForeignMap, kUnknownKeyframe, kMissingDelta };
+  UpdateStatus applyMapUpdate(const MapUpdate& update);
+
+  const Map& map() const;
+  int64_t mapVersion() const;
+  void reset();  // forget the map; the next frame initialises a new one
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rgbdslam

@@ -1,0 +1,44 @@
+#pragma once
+// One loader for every component's options. Each options struct (defaults in-class) binds
+// its fields here with a unit and a meaning; load() reads a YAML file (OpenCV FileStorage)
+// with one mapping per section and rejects unknown sections, unknown keys and ill-typed or
+// out-of-range values, naming the key and the file; describe() prints the effective
+// configuration. Call order: bind all fields, load() (optional), describe().
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rgbdslam/util/expected.h"
+
+namespace rgbdslam {
+
+class OptionRegistry {
+ public:
+  void bind(const std::string& section, const std::string& key, double* field, double min,
+            double max, const std::string& unit, const std::string& help);
+  void bind(const std::string& section, const std::string& key, int* field, int min, int max,
+            const std::string& unit, const std::string& help);
+  void bind(const std::string& section, const std::string& key, bool* field,
+            const std::string& help);
+  // A string restricted to 'choices'.
+  void bind(const std::string& section, const std::string& key, std::string* field,
+            const std::vector<std::string>& choices, const std::string& help);
+
+  Status load(const std::string& path);
+  // Sets one option from "section.key=value" (command-line overrides).
+  Status set(const std::string& assignment);
+  std::string describe() const;  // "section.key = value  [unit] help" per line
+  // Markdown table of every option with unit, default and meaning (for docs).
+  std::string markdownTable() const;
+
+ private:
+  struct Entry {
+    std::string section, key, unit, help, kind, default_text;
+    std::function<Status(const std::string&)> parse;  // from text
+    std::function<std::string()> show;
+  };
+  Entry* find(const std::string& section, const std::string& key);
+  std::vector<Entry> entries_;
+};
+
+}  // namespace rgbdslam

@@ -1,0 +1,126 @@
+#include "rgbdslam/map/map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rgbdslam {
+
+std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
+  if (depth.empty()) return std::nullopt;
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) return std::nullopt;
+  const float d = depth.at<float>(v, u);
+  if (!std::isfinite(d)) return std::nullopt;
+  return d;
+}
+
+cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m) {
+  if (raw.empty()) return cv::Mat();
+  cv::Mat out(raw.size(), CV_32FC1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const double inv = 1.0 / depth_scale;
+  for (int v = 0; v < raw.rows; ++v) {
+    const uint16_t* in = raw.ptr<uint16_t>(v);
+    float* o = out.ptr<float>(v);
+    for (int u = 0; u < raw.cols; ++u) {
+      const double d = in[u] * inv;
+      o[u] = (in[u] != 0 && d >= min_m && d <= max_m) ? static_cast<float>(d) : nan;
+    }
+  }
+  return out;
+}
+
+std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeBuildOptions& options) {
+  auto keyframe = std::make_unique<Keyframe>();
+  keyframe->id = data.id;
+  keyframe->utime = data.utime;
+  keyframe->T_w_c = data.T_w_c;
+  keyframe->raw_depth = data.depth;
+  keyframe->depth_scale = data.depth_scale;
+  keyframe->depth = depthToMetres(data.depth, data.depth_scale, options.min_depth_m, options.max_depth_m);
+  buildPyramid(data.grey, kMaxLevels, &keyframe->pyramid);
+  detectPyramidCorners(keyframe->pyramid, options.corners, /*with_maxima=*/true, &keyframe->corners);
+  keyframe->sbi = makeSmallBlurryImage(keyframe->pyramid);
+  for (const auto& m : data.measurements) keyframe->measurements[m.point_id] = m;
+  return keyframe;
+}
+
+Keyframe* Map::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
+  Keyframe* raw = keyframe.get();
+  for (const auto& [point_id, m] : raw->measurements) observers_[point_id].push_back(raw->id);
+  keyframes_[raw->id] = std::move(keyframe);
+  return raw;
+}
+
+Keyframe* Map::keyframe(KeyframeId id) {
+  const auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second.get();
+}
+
+const Keyframe* Map::keyframe(KeyframeId id) const {
+  const auto it = keyframes_.find(id);
+  return it == keyframes_.end() ? nullptr : it->second.get();
+}
+
+MapPoint* Map::addPoint(const MapPoint& point) {
+  auto [it, inserted] = points_.try_emplace(point.id, point);
+  if (!inserted) {
+    const int projected = it->second.times_projected, found = it->second.times_found;
+    it->second = point;
+    it->second.times_projected = projected;
+    it->second.times_found = found;
+  }
+  return &it->second;
+}
+
+MapPoint* Map::point(PointId id) {
+  const auto it = points_.find(id);
+  return it == points_.end() ? nullptr : &it->second;
+}
+
+const MapPoint* Map::point(PointId id) const {
+  const auto it = points_.find(id);
+  return it == points_.end() ? nullptr : &it->second;
+}
+
+void Map::removePoint(PointId id) {
+  const auto obs = observers_.find(id);
+  if (obs != observers_.end()) {
+    for (KeyframeId kf : obs->second) {
+      if (Keyframe* keyframe = this->keyframe(kf)) keyframe->measurements.erase(id);
+    }
+    observers_.erase(obs);
+  }
+  points_.erase(id);
+}
+
+void Map::addMeasurement(KeyframeId keyframe_id, const Measurement& measurement) {
+  Keyframe* keyframe = this->keyframe(keyframe_id);
+  if (!keyframe || !point(measurement.point_id)) return;
+  const bool is_new = keyframe->measurements.count(measurement.point_id) == 0;
+  keyframe->measurements[measurement.point_id] = measurement;
+  if (is_new) observers_[measurement.point_id].push_back(keyframe_id);
+}
+
+std::vector<KeyframeId> Map::observers(PointId id) const {
+  const auto it = observers_.find(id);
+  return it == observers_.end() ? std::vector<KeyframeId>{} : it->second;
+}
+
+std::vector<KeyframeId> Map::nearestKeyframes(const SE3& T_w_c, size_t n, double metres_per_radian) const {
+  std::vector<std::pair<double, KeyframeId>> scored;
+  const Vec3 axis = T_w_c.rotation() * Vec3::UnitZ();
+  for (const auto& [id, kf] : keyframes_) {
+    const double distance = (kf->T_w_c.translation() - T_w_c.translation()).norm();
+    const Vec3 kf_axis = kf->T_w_c.rotation() * Vec3::UnitZ();
+    const double angle = std::acos(std::clamp(axis.dot(kf_axis), -1.0, 1.0));
+    scored.emplace_back(distance + metres_per_radian * angle, id);
+  }
+  std::sort(scored.begin(), scored.end());
+  std::vector<KeyframeId> out;
+  for (size_t i = 0; i < scored.size() && i < n; ++i) out.push_back(scored[i].second);
+  return out;
+}
+
+}  // namespace rgbdslam

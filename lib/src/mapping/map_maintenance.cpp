@@ -1,0 +1,87 @@
+#include "rgbdslam/mapping/map_maintenance.h"
+
+#include <algorithm>
+#include <map>
+
+namespace rgbdslam {
+
+std::vector<PointId> sortedPointIds(const Map& map) {
+  std::vector<PointId> ids;
+  ids.reserve(map.numPoints());
+  for (const auto& [id, point] : map.points()) ids.push_back(id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+void removeMeasurement(Map* map, KeyframeId keyframe_id, PointId point_id) {
+  const MapPoint* point = map->point(point_id);
+  if (!point) return;
+  // Map has no single-measurement removal: re-create the point with its other measurements.
+  const MapPoint copy = *point;
+  std::vector<std::pair<KeyframeId, Measurement>> keep;
+  for (KeyframeId kf : map->observers(point_id)) {
+    const Keyframe* keyframe = map->keyframe(kf);
+    if (kf == keyframe_id || !keyframe) continue;
+    const auto it = keyframe->measurements.find(point_id);
+    if (it != keyframe->measurements.end()) keep.emplace_back(kf, it->second);
+  }
+  map->removePoint(point_id);
+  map->addPoint(copy);
+  for (const auto& [kf, m] : keep) map->addMeasurement(kf, m);
+}
+
+namespace {
+
+// Measurements of the point that still exist, as keyframe ids.
+std::vector<KeyframeId> liveObservers(const Map& map, PointId pid) {
+  std::vector<KeyframeId> out;
+  for (KeyframeId kf : map.observers(pid)) {
+    const Keyframe* keyframe = map.keyframe(kf);
+    if (keyframe && keyframe->measurements.count(pid)) out.push_back(kf);
+  }
+  return out;
+}
+
+}  // namespace
+
+CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
+                   const std::set<KeyframeId>& recent_keyframes, const CullOptions& options) {
+  CullResult result;
+  std::set<PointId> removed;
+  auto remove = [&](PointId pid) {
+    map->removePoint(pid);
+    removed.insert(pid);
+  };
+  // 1. Points that are mostly outliers, or whose patch measurement (source) is one.
+  std::map<PointId, int> flagged;
+  for (const auto& [pid, kf] : *pending_2d_outliers) ++flagged[pid];
+  for (const auto& [pid, count] : flagged) {
+    const MapPoint* point = map->point(pid);
+    if (!point) continue;
+    const size_t total = liveObservers(*map, pid).size();
+    const bool source_bad = pending_2d_outliers->count({pid, point->source_keyframe}) > 0;
+    if (source_bad || count > options.max_outlier_fraction * static_cast<double>(total)) remove(pid);
+  }
+  // 2. The remaining outlier measurements.
+  for (const auto& [pid, kf] : *pending_2d_outliers) {
+    if (removed.count(pid) || !map->point(pid)) continue;
+    const Keyframe* keyframe = map->keyframe(kf);
+    if (!keyframe || !keyframe->measurements.count(pid)) continue;
+    removeMeasurement(map, kf, pid);
+    ++result.removed_measurements;
+  }
+  pending_2d_outliers->clear();
+  // 3. Points with too few good measurements.
+  for (PointId pid : sortedPointIds(*map)) {
+    const std::vector<KeyframeId> seen = liveObservers(*map, pid);
+    if (static_cast<int>(seen.size()) >= options.min_good_measurements) continue;
+    const MapPoint* point = map->point(pid);
+    const bool recent_source_only = seen.size() == 1 && seen[0] == point->source_keyframe &&
+                                    recent_keyframes.count(point->source_keyframe) > 0;
+    if (!recent_source_only) remove(pid);
+  }
+  result.removed_points.assign(removed.begin(), removed.end());
+  return result;
+}
+
+}  // namespace rgbdslam

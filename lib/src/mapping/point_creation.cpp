@@ -1,0 +1,109 @@
+#include "rgbdslam/mapping/point_creation.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdslam {
+namespace {
+
+// Occupancy grid over level-0 pixels with cells of min_separation: a corner is rejected
+// when an occupied point lies within min_separation.
+class SeparationGrid {
+ public:
+  SeparationGrid(int width, int height, double separation)
+      : cell_(std::max(1.0, separation)), separation2_(separation * separation),
+        cols_(static_cast<int>(width / cell_) + 1), rows_(static_cast<int>(height / cell_) + 1),
+        cells_(static_cast<size_t>(cols_ * rows_)) {}
+
+  bool isFree(const Eigen::Vector2d& uv) const {
+    const int cx = cellX(uv), cy = cellY(uv);
+    for (int y = std::max(0, cy - 1); y <= std::min(rows_ - 1, cy + 1); ++y) {
+      for (int x = std::max(0, cx - 1); x <= std::min(cols_ - 1, cx + 1); ++x) {
+        for (const auto& other : cells_[y * cols_ + x]) {
+          if ((other - uv).squaredNorm() < separation2_) return false;
+        }
+      }
+    }
+    return true;
+  }
+  void occupy(const Eigen::Vector2d& uv) {
+    const int cx = std::clamp(cellX(uv), 0, cols_ - 1), cy = std::clamp(cellY(uv), 0, rows_ - 1);
+    cells_[cy * cols_ + cx].push_back(uv);
+  }
+
+ private:
+  int cellX(const Eigen::Vector2d& uv) const { return static_cast<int>(uv.x() / cell_); }
+  int cellY(const Eigen::Vector2d& uv) const { return static_cast<int>(uv.y() / cell_); }
+  double cell_, separation2_;
+  int cols_, rows_;
+  std::vector<std::vector<Eigen::Vector2d>> cells_;
+};
+
+// Depth at a level-0 pixel if the 3x3 neighbourhood is valid and smooth (not an edge).
+std::optional<double> stableDepth(const cv::Mat& depth, const Eigen::Vector2d& uv, double max_spread) {
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  if (u < 1 || v < 1 || u >= depth.cols - 1 || v >= depth.rows - 1) return std::nullopt;
+  float lo = INFINITY, hi = -INFINITY;
+  for (int dv = -1; dv <= 1; ++dv) {
+    for (int du = -1; du <= 1; ++du) {
+      const float d = depth.at<float>(v + dv, u + du);
+      if (!std::isfinite(d)) return std::nullopt;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+  }
+  const float centre = depth.at<float>(v, u);
+  if (hi - lo > max_spread * centre) return std::nullopt;
+  return centre;
+}
+
+struct Candidate {
+  float score;
+  cv::Point2i corner;
+};
+
+}  // namespace
+
+std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
+                                            const DepthPointOptions& options, PointId first_id) {
+  std::vector<NewPoint> created;
+  if (keyframe.depth.empty()) return created;
+  SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
+  for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
+  const SE3& T_w_c = keyframe.T_w_c;
+  for (int level = 0; level < static_cast<int>(keyframe.corners.size()); ++level) {
+    const cv::Mat& image = keyframe.pyramid.levels[level];
+    std::vector<Candidate> candidates;
+    for (const cv::Point2i& c : keyframe.corners[level].maxima) {
+      if (c.x < options.patch_border_px || c.y < options.patch_border_px ||
+          c.x >= image.cols - options.patch_border_px || c.y >= image.rows - options.patch_border_px) {
+        continue;
+      }
+      const float score = shiTomasiScore(image, c);
+      if (score >= options.min_shi_tomasi) candidates.push_back({score, c});
+    }
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+    int added = 0;
+    for (const Candidate& cand : candidates) {
+      if (added >= options.max_points_per_level) break;
+      const Eigen::Vector2d uv = zeroFromLevel(Eigen::Vector2d(cand.corner.x, cand.corner.y), level);
+      if (!grid.isFree(uv)) continue;
+      const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity);
+      if (!depth) continue;
+      NewPoint np;
+      np.point.id = first_id + static_cast<PointId>(created.size());
+      np.point.p_w = T_w_c * camera.unproject(uv, *depth);
+      np.point.source_keyframe = keyframe.id;
+      np.point.source_level = level;
+      np.point.source_uv = uv;
+      np.measurement = Measurement{np.point.id, uv, level, *depth};
+      created.push_back(np);
+      grid.occupy(uv);
+      ++added;
+    }
+  }
+  return created;
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,31 @@
+#include "rgbdslam/tracking/keyframe_policy.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdslam {
+namespace {
+
+double rotationAngleDeg(const SE3& a, const SE3& b) {
+  return a.rotation().angularDistance(b.rotation()) * 180.0 / M_PI;
+}
+
+}  // namespace
+
+bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
+                       const KeyframePolicyOptions& options) {
+  if (!input.tracking_good || input.frames_since_keyframe < options.min_frames_between_keyframes) {
+    return false;
+  }
+  if (!(input.median_depth_m > 0.0)) return false;
+  const double max_distance = options.distance_ratio * input.median_depth_m;
+  for (const auto& [id, keyframe] : map.keyframes()) {
+    const double distance = (keyframe->T_w_c.translation() - input.T_w_c.translation()).norm();
+    if (distance <= max_distance && rotationAngleDeg(keyframe->T_w_c, input.T_w_c) <= options.angle_deg) {
+      return false;  // this keyframe already covers the view
+    }
+  }
+  return true;
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,115 @@
+#include "rgbdslam/tracking/point_projection.h"
+
+#include <Eigen/Dense>
+
+namespace rgbdslam {
+
+void makeKeyframeViews(const Map& map, const SE3& T_c_w, std::vector<KeyframeView>* views) {
+  views->clear();
+  if (map.keyframes().empty()) return;
+  views->resize(static_cast<size_t>(map.keyframes().rbegin()->first) + 1);
+  const Mat3 R_c_w = T_c_w.rotationMatrix();
+  for (const auto& [id, keyframe] : map.keyframes()) {
+    if (id < 0) continue;
+    KeyframeView& view = (*views)[static_cast<size_t>(id)];
+    const SE3 T_src_w = keyframe->T_c_w();
+    const Mat3 R_src_w = T_src_w.rotationMatrix();
+    view.valid = true;
+    view.R_cur_src = R_c_w * R_src_w.transpose();
+    view.src_z_row = R_src_w.row(2);
+    view.src_z_offset = T_src_w.translation().z();
+  }
+}
+
+bool initSlot(const Map& map, const PinholeCamera& camera, MapPoint* point, PointSlot* slot) {
+  const Keyframe* source = map.keyframe(point->source_keyframe);
+  if (!source) return false;
+  slot->point = point;
+  slot->source = source;
+  if (camera.hasDistortion()) {
+    Eigen::Matrix2d d_uv_d_m;
+    camera.distortAndScale(camera.unprojectToPlane(point->source_uv), &d_uv_d_m);
+    slot->d_m_d_uvsrc = d_uv_d_m.inverse();
+  } else {
+    slot->d_m_d_uvsrc << 1.0 / camera.fx, 0.0, 0.0, 1.0 / camera.fy;
+  }
+  slot->patch_level = -1;
+  slot->searched = slot->found = false;
+  return true;
+}
+
+bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
+                  const std::vector<KeyframeView>& views, const ProjectionOptions& options,
+                  PointSlot* slot) {
+  slot->search_level = -1;
+  const MapPoint& point = *slot->point;
+  slot->p_c = T_c_w * point.p_w;
+  if (slot->p_c.z() < options.min_depth_m) return false;
+  Eigen::Matrix<double, 2, 3> d_uv_d_pc;
+  const auto uv = camera.project(slot->p_c, &d_uv_d_pc);
+  if (!uv || !camera.inImage(*uv, options.margin_px)) return false;
+  slot->uv = *uv;
+  const auto kf = static_cast<size_t>(point.source_keyframe);
+  if (kf >= views.size() || !views[kf].valid) return false;
+  const KeyframeView& view = views[kf];
+  const double z_src = view.src_z_row.dot(point.p_w) + view.src_z_offset;
+  if (!(z_src > options.min_depth_m)) return false;
+  // A source-pixel step on the fronto-parallel plane at depth z_src moves the point by
+  // z_src * d_m_d_uv in the source camera (x, y); seen from here through R_cur_src.
+  const Eigen::Matrix<double, 3, 2> d_psrc_d_uvsrc =
+      (Eigen::Matrix<double, 3, 2>() << z_src * slot->d_m_d_uvsrc, 0.0, 0.0).finished();
+  slot->A_cur_src.noalias() = d_uv_d_pc * (view.R_cur_src * d_psrc_d_uvsrc);
+  slot->search_level = chooseSearchLevel(slot->A_cur_src, point.source_level,
+                                         slot->source->pyramid.numLevels());
+  return slot->search_level >= 0;
+}
+
+bool ensurePatch(PointSlot* slot, double tolerance) {
+  if (slot->patch_level == slot->search_level &&
+      (slot->A_cur_src - slot->patch_A).cwiseAbs().maxCoeff() <= tolerance) {
+    return true;
+  }
+  const MapPoint& point = *slot->point;
+  const int source_level = point.source_level;
+  if (source_level >= slot->source->pyramid.numLevels()) return false;
+  if (!warpPatch(slot->source->pyramid.levels[source_level], source_level, point.source_uv,
+                 slot->A_cur_src, slot->search_level, &slot->patch)) {
+    slot->patch_level = -1;
+    return false;
+  }
+  slot->patch_A = slot->A_cur_src;
+  slot->patch_level = slot->search_level;
+  return true;
+}
+
+}  // namespace rgbdslam
+
+namespace rgbdslam {
+
+int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
+                 const std::vector<LevelCorners>& corners, const PointSearchOptions& options) {
+  int found = 0;
+  for (PointSlot* slot : slots) {
+    slot->found = false;
+    slot->searched = false;
+    const int level = slot->search_level;
+    if (level < 0 || level >= pyramid.numLevels() || level >= static_cast<int>(corners.size())) {
+      continue;
+    }
+    if (!ensurePatch(slot, options.patch_cache_tolerance)) continue;
+    slot->searched = true;
+    const Eigen::Vector2d predicted_level = levelFromZero(slot->uv, level);
+    const auto match = searchPatch(slot->patch, pyramid.levels[level], corners[level],
+                                   predicted_level, options.radius_px, options.max_zmssd);
+    if (!match) continue;
+    Eigen::Vector2d position(match->x, match->y);
+    if (!refineSubpixel(slot->patch, pyramid.levels[level], &position, options.subpixel)) continue;
+    slot->found = true;
+    slot->found_uv = zeroFromLevel(position, level);
+    slot->found_level = level;
+    ++found;
+  }
+  return found;
+}
+
+}  // namespace rgbdslam

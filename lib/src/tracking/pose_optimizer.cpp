@@ -1,0 +1,120 @@
+#include "rgbdslam/tracking/pose_optimizer.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+
+#include "rgbdslam/mapping/ba_residuals.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr double kMadToSigma = 1.4826;  // sigma of a Gaussian per median absolute deviation
+constexpr int kMinObservations = 3;     // 6 unknowns, 2 equations each
+
+// Linearised residuals at the current pose, normalised by their sigmas.
+struct Linearisation {
+  std::vector<Eigen::Vector2d> r2;
+  std::vector<Eigen::Matrix<double, 2, 6>> J2;
+  std::vector<uint8_t> valid2;
+  std::vector<double> rd;
+  std::vector<Eigen::Matrix<double, 1, 6>> Jd;
+  std::vector<uint8_t> validd;
+  std::vector<double> e2_2d, e2_depth;  // squared normalised errors of the valid ones
+};
+
+void linearise(const PinholeCamera& camera, const SE3& T_c_w,
+               const std::vector<PoseObservation>& observations,
+               const PoseOptimizerOptions& options, Linearisation* lin) {
+  const size_t n = observations.size();
+  lin->r2.resize(n);
+  lin->J2.resize(n);
+  lin->valid2.assign(n, 0);
+  lin->rd.resize(n);
+  lin->Jd.resize(n);
+  lin->validd.assign(n, 0);
+  lin->e2_2d.clear();
+  lin->e2_depth.clear();
+  for (size_t i = 0; i < n; ++i) {
+    const PoseObservation& obs = observations[i];
+    if (reprojectionResidual(camera, T_c_w, obs.p_w, obs.uv, &lin->r2[i], &lin->J2[i])) {
+      const double inv_sigma = 1.0 / sigma2d(obs.level);
+      lin->r2[i] *= inv_sigma;
+      lin->J2[i] *= inv_sigma;
+      lin->valid2[i] = 1;
+      lin->e2_2d.push_back(lin->r2[i].squaredNorm());
+    }
+    if (options.use_depth && obs.depth > 0.0 &&
+        depthResidual(T_c_w, obs.p_w, obs.depth, &lin->rd[i], &lin->Jd[i])) {
+      const double inv_sigma = 1.0 / sigmaDepth(obs.depth, options.depth_sigma_coefficient);
+      lin->rd[i] *= inv_sigma;
+      lin->Jd[i] *= inv_sigma;
+      lin->validd[i] = 1;
+      lin->e2_depth.push_back(lin->rd[i] * lin->rd[i]);
+    }
+  }
+}
+
+}  // namespace
+
+double robustSigmaSquared(std::vector<double>* e2, double floor_sigma) {
+  const double floor2 = floor_sigma * floor_sigma;
+  if (e2->empty()) return floor2;
+  const auto middle = e2->begin() + static_cast<std::ptrdiff_t>(e2->size() / 2);
+  std::nth_element(e2->begin(), middle, e2->end());
+  return std::max(floor2, kMadToSigma * kMadToSigma * *middle);
+}
+
+PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
+                                 const std::vector<PoseObservation>& observations,
+                                 const PoseOptimizerOptions& options,
+                                 std::vector<uint8_t>* inlier) {
+  PoseOptimizerResult result;
+  result.T_c_w = T_c_w_start;
+  if (inlier) inlier->assign(observations.size(), 0);
+  if (static_cast<int>(observations.size()) < kMinObservations) return result;
+  Linearisation lin;
+  const double c2 = options.tukey_c * options.tukey_c;
+  for (int iteration = 0; iteration < options.iterations; ++iteration) {
+    linearise(camera, result.T_c_w, observations, options, &lin);
+    if (static_cast<int>(lin.e2_2d.size()) < kMinObservations) return result;
+    const double cut2_2d = c2 * robustSigmaSquared(&lin.e2_2d, options.min_robust_sigma);
+    const double cut2_depth = c2 * robustSigmaSquared(&lin.e2_depth, options.min_robust_sigma);
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    int inliers_2d = 0, inliers_depth = 0;
+    for (size_t i = 0; i < observations.size(); ++i) {
+      if (lin.valid2[i]) {
+        const double w = tukeyWeight(lin.r2[i].squaredNorm(), cut2_2d);
+        if (inlier) (*inlier)[i] = w > 0.0;
+        if (w > 0.0) {
+          ++inliers_2d;
+          H.noalias() += w * lin.J2[i].transpose() * lin.J2[i];
+          b.noalias() += w * lin.J2[i].transpose() * lin.r2[i];
+        }
+      }
+      if (lin.validd[i]) {
+        const double w = tukeyWeight(lin.rd[i] * lin.rd[i], cut2_depth);
+        if (w > 0.0) {
+          ++inliers_depth;
+          H.noalias() += w * lin.Jd[i].transpose() * lin.Jd[i];
+          b.noalias() += (w * lin.rd[i]) * lin.Jd[i].transpose();
+        }
+      }
+    }
+    result.inliers_2d = inliers_2d;
+    result.inliers_depth = inliers_depth;
+    if (inliers_2d < kMinObservations) return result;
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(H);
+    if (solver.info() != Eigen::Success) return result;
+    // Minimise sum w |r + J xi|^2: J^T W J xi = -J^T W r.
+    const Vec6 xi = solver.solve(-b);
+    if (!xi.allFinite()) return result;
+    result.T_c_w = SE3::exp(xi) * result.T_c_w;
+    result.iterations = iteration + 1;
+    result.ok = true;
+    if (xi.norm() < options.converged_step) break;
+  }
+  return result;
+}
+
+}  // namespace rgbdslam

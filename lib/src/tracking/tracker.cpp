@@ -1,0 +1,550 @@
+#include "rgbdslam/tracking/tracker.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "rgbdslam/image/corners.h"
+#include "rgbdslam/image/small_blurry_image.h"
+#include "rgbdslam/tracking/keyframe_policy.h"
+#include "rgbdslam/tracking/point_projection.h"
+#include "rgbdslam/tracking/pose_optimizer.h"
+#include "rgbdslam/tracking/relocaliser.h"
+
+namespace rgbdslam {
+namespace {
+
+using TrackStatus = TrackResult::Status;
+
+// Provisional points of one keyframe use ids below this offset within its id block; the
+// mapper's own points use the upper half.
+constexpr int64_t kProvisionalPointsPerKeyframe = kPointsPerKeyframe / 2;
+
+// The result of tracking one frame from a start pose.
+struct Attempt {
+  SE3 T_c_w;
+  int searched = 0;
+  int found = 0;
+  double quality = 0.0;
+  double median_depth_m = 0.0;  // of the found inliers
+};
+
+double median(std::vector<double>* values) {
+  if (values->empty()) return 0.0;
+  const auto middle = values->begin() + static_cast<std::ptrdiff_t>(values->size() / 2);
+  std::nth_element(values->begin(), middle, values->end());
+  return *middle;
+}
+
+}  // namespace
+
+class Tracker::Impl {
+ public:
+  Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
+      : camera_(camera), options_(options), mode_(mode), map_id_(map_id),
+        rng_(static_cast<uint32_t>(options.random_seed)) {}
+
+  TrackResult track(const RgbdFrame& frame) {
+    const auto start = std::chrono::steady_clock::now();
+    TrackResult result = trackFrame(frame);
+    result.track_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    result.pose.utime = frame.utime;
+    result.pose.seq = frame.seq;
+    result.pose.latency_ms = result.track_ms;
+    return result;
+  }
+
+  UpdateStatus applyMapUpdate(const MapUpdate& update);
+  const Map& map() const { return map_; }
+  int64_t mapVersion() const { return version_; }
+
+  void reset() {
+    map_ = Map();
+    slots_.clear();
+    slot_index_.clear();
+    acked_.clear();
+    version_ = 0;
+    state_ = TrackingState::kInitialising;
+    T_c_w_ = SE3();
+    velocity_.setZero();
+    frames_since_keyframe_ = 0;
+    next_keyframe_id_ = 0;
+    have_previous_sbi_ = false;
+  }
+
+ private:
+  TrackResult trackFrame(const RgbdFrame& frame);
+  void prepareFrame(const RgbdFrame& frame);
+  TrackResult initialise(const RgbdFrame& frame);
+  TrackResult relocalise(const RgbdFrame& frame);
+  TrackResult trackNormally(const RgbdFrame& frame);
+  SE3 predictPose() const;
+  Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame);
+  void projectAll(const SE3& T_c_w);
+  SE3 runStage(const std::vector<PointSlot*>& slots, const SE3& T_c_w, int radius_px,
+               const RgbdFrame& frame, bool mark_inliers);
+  void selectSubset(std::vector<PointSlot*>* slots, int max_count);
+  bool isLost(const Attempt& attempt) const;
+  bool isReliable(const MapPoint& point) const {
+    return point.times_projected < options_.unreliable_after_searches ||
+           point.times_found >= options_.unreliable_found_ratio * point.times_projected;
+  }
+  TrackResult accept(const Attempt& attempt, const RgbdFrame& frame, TrackingState state);
+  KeyframeData addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
+                           std::vector<Measurement> measurements);
+  std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
+  double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
+  void addSlot(MapPoint* point);
+  void removeSlot(PointId id);
+  PoseOptimizerOptions poseOptions() const;
+
+  PinholeCamera camera_;
+  TrackerOptions options_;
+  SlamMode mode_;
+  int64_t map_id_;
+  std::mt19937 rng_;
+
+  // The replica and the tracker's per-point data.
+  Map map_;
+  int64_t version_ = 0;
+  std::unordered_set<KeyframeId> acked_;
+  std::vector<PointSlot> slots_;
+  std::unordered_map<PointId, size_t> slot_index_;
+
+  // Motion state.
+  TrackingState state_ = TrackingState::kInitialising;
+  SE3 T_c_w_;          // last good pose
+  Vec6 velocity_ = Vec6::Zero();  // log of the last inter-frame motion (left, on T_c_w)
+  int frames_since_keyframe_ = 0;
+  KeyframeId next_keyframe_id_ = 0;
+
+  // Per-frame buffers, reused.
+  cv::Mat grey_;
+  ImagePyramid pyramid_;
+  std::vector<LevelCorners> corners_;
+  SmallBlurryImage sbi_, previous_sbi_;
+  bool have_previous_sbi_ = false;
+  std::vector<KeyframeView> views_;
+  std::vector<PointSlot*> visible_, stage_;
+  std::vector<PoseObservation> observations_;
+  std::vector<uint8_t> inliers_;
+  std::vector<double> depths_;
+};
+
+// ---------------------------------------------------------------------------------------
+// Frame flow
+
+TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
+  TrackResult result;
+  result.pose.state = state_;
+  result.pose.T_w_c = T_c_w_.inverse();
+  if (frame.colour.empty()) {
+    result.error = "frame has no colour image";
+    return result;
+  }
+  if (frame.colour.cols != camera_.width || frame.colour.rows != camera_.height ||
+      (frame.colour.type() != CV_8UC3 && frame.colour.type() != CV_8UC1)) {
+    result.error = "frame is " + std::to_string(frame.colour.cols) + "x" +
+                   std::to_string(frame.colour.rows) + ", camera '" + camera_.name + "' is " +
+                   std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +
+                   " (8-bit colour or grey expected)";
+    return result;
+  }
+  prepareFrame(frame);
+  TrackResult tracked;
+  if (map_.numKeyframes() == 0) tracked = initialise(frame);
+  else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
+  else tracked = trackNormally(frame);
+  std::swap(previous_sbi_, sbi_);
+  have_previous_sbi_ = true;
+  return tracked;
+}
+
+void Tracker::Impl::prepareFrame(const RgbdFrame& frame) {
+  if (frame.colour.channels() == 1) frame.colour.copyTo(grey_);
+  else cv::cvtColor(frame.colour, grey_, cv::COLOR_BGR2GRAY);
+  buildPyramid(grey_, kMaxLevels, &pyramid_);
+  detectPyramidCorners(pyramid_, options_.keyframe_build.corners, /*with_maxima=*/false, &corners_);
+  makeSmallBlurryImage(pyramid_, &sbi_);
+}
+
+TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
+  TrackResult result;
+  result.pose.state = TrackingState::kInitialising;
+  if (frame.depth.empty() || frame.depth.size() != frame.colour.size()) {
+    result.error = "no depth to initialise";
+    return result;
+  }
+  KeyframeData data;
+  data.utime = frame.utime;
+  data.map_id = map_id_;
+  data.id = 0;
+  data.grey = grey_.clone();
+  data.depth = frame.depth.clone();
+  data.depth_scale = frame.depth_scale;
+  std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
+  const std::vector<NewPoint> points =
+      createPointsFromDepth(*keyframe, camera_, options_.depth_points, 0);
+  if (static_cast<int>(points.size()) < options_.init_min_points) {
+    result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
+                   std::to_string(options_.init_min_points) + " needed)";
+    return result;
+  }
+  map_.addKeyframe(std::move(keyframe));
+  for (const NewPoint& np : points) {
+    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    addSlot(map_.addPoint(np.point));
+    map_.addMeasurement(0, np.measurement);
+    data.measurements.push_back(np.measurement);
+    data.new_points.push_back(np.point.data());
+  }
+  next_keyframe_id_ = 1;
+  frames_since_keyframe_ = 0;
+  T_c_w_ = SE3();
+  velocity_.setZero();
+  state_ = TrackingState::kTracking;
+  result.status = TrackStatus::kInitialised;
+  result.pose.state = TrackingState::kTracking;
+  result.pose.T_w_c = SE3();
+  result.pose.points_tracked = static_cast<int>(data.new_points.size());
+  result.pose.quality = 1.0;
+  result.new_keyframe = std::move(data);
+  return result;
+}
+
+SE3 Tracker::Impl::predictPose() const {
+  Vec6 xi = options_.velocity_damping * velocity_;
+  if (options_.use_sbi_rotation && have_previous_sbi_) {
+    // PTAM: the SBI rotation replaces the rotational velocity, and sideways translation
+    // (which the SBI alignment has already explained as rotation) is dropped.
+    const SE3 T_old_new =
+        rotationFromSe2(alignSmallBlurryImages(previous_sbi_, sbi_), camera_, sbi_.scale);
+    xi.tail<3>() = T_old_new.inverse().log().tail<3>();
+    xi(0) = 0.0;
+    xi(1) = 0.0;
+  }
+  return SE3::exp(xi) * T_c_w_;
+}
+
+TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
+  const Attempt attempt = trackFrom(predictPose(), frame);
+  if (isLost(attempt)) {
+    state_ = TrackingState::kLost;
+    velocity_.setZero();
+    TrackResult result;
+    result.status = TrackStatus::kLost;
+    result.pose.state = TrackingState::kLost;
+    result.pose.T_w_c = T_c_w_.inverse();
+    result.pose.points_tracked = attempt.found;
+    result.pose.quality = attempt.quality;
+    return result;
+  }
+  const TrackingState state =
+      attempt.quality >= options_.quality_good ? TrackingState::kTracking : TrackingState::kDodgy;
+  return accept(attempt, frame, state);
+}
+
+TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
+  std::vector<RelocalisationCandidate> candidates =
+      relocalisationCandidates(map_, sbi_, camera_, options_.relocalise_candidates);
+  // The last good pose first: after a short disturbance the camera is often still near it.
+  candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
+  for (const RelocalisationCandidate& candidate : candidates) {
+    const Attempt attempt = trackFrom(candidate.T_w_c.inverse(), frame);
+    if (isLost(attempt) || attempt.quality < options_.quality_good) continue;
+    velocity_.setZero();
+    return accept(attempt, frame, TrackingState::kRelocalised);
+  }
+  TrackResult result;
+  result.status = TrackStatus::kLost;
+  result.pose.state = TrackingState::kLost;
+  result.pose.T_w_c = T_c_w_.inverse();
+  return result;
+}
+
+bool Tracker::Impl::isLost(const Attempt& attempt) const {
+  return attempt.searched == 0 || attempt.quality < options_.quality_lost ||
+         attempt.found < options_.min_points_tracked;
+}
+
+// Takes the attempt's pose, updates the motion model and point statistics, and decides
+// about a keyframe.
+TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame,
+                                  TrackingState state) {
+  if (state != TrackingState::kRelocalised) velocity_ = (attempt.T_c_w * T_c_w_.inverse()).log();
+  T_c_w_ = attempt.T_c_w;
+  state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
+  for (PointSlot* slot : stage_) {
+    if (!slot->searched) continue;
+    ++slot->point->times_projected;
+    if (slot->found) ++slot->point->times_found;
+  }
+  TrackResult result;
+  result.status = state == TrackingState::kRelocalised ? TrackStatus::kRelocalised : TrackStatus::kTracked;
+  result.pose.state = state;
+  result.pose.T_w_c = T_c_w_.inverse();
+  result.pose.points_tracked = attempt.found;
+  result.pose.quality = attempt.quality;
+  ++frames_since_keyframe_;
+  const KeyframePolicyInput input{state == TrackingState::kTracking, frames_since_keyframe_,
+                                  attempt.median_depth_m, result.pose.T_w_c};
+  const KeyframePolicyOptions policy{options_.min_frames_between_keyframes,
+                                     options_.keyframe_distance_ratio, options_.keyframe_angle_deg};
+  if (shouldAddKeyframe(map_, input, policy)) {
+    result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
+  }
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------
+// Tracking from a start pose: projection, coarse stage, fine stage
+
+Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame) {
+  for (PointSlot& slot : slots_) slot.searched = slot.found = false;
+  SE3 T_c_w = T_c_w_start;
+  projectAll(T_c_w);
+  stage_.clear();
+  for (PointSlot* slot : visible_) {
+    if (slot->search_level >= options_.coarse_min_level) stage_.push_back(slot);
+  }
+  if (static_cast<int>(stage_.size()) >= options_.coarse_min_points) {
+    selectSubset(&stage_, options_.coarse_max_points);
+    T_c_w = runStage(stage_, T_c_w, options_.coarse_radius_px, frame, false);
+    for (PointSlot* slot : stage_) slot->searched = slot->found = false;
+    projectAll(T_c_w);
+  }
+  stage_ = visible_;
+  selectSubset(&stage_, options_.fine_max_points);
+  T_c_w = runStage(stage_, T_c_w, options_.fine_radius_px, frame, true);
+
+  Attempt attempt;
+  attempt.T_c_w = T_c_w;
+  depths_.clear();
+  int reliable_searched = 0, reliable_found = 0;
+  for (PointSlot* slot : stage_) {
+    attempt.searched += slot->searched;
+    attempt.found += slot->found;
+    if (slot->found) depths_.push_back((T_c_w * slot->point->p_w).z());
+    if (slot->searched && isReliable(*slot->point)) {
+      ++reliable_searched;
+      reliable_found += slot->found;
+    }
+  }
+  if (reliable_searched > 0) {
+    attempt.quality = static_cast<double>(reliable_found) / reliable_searched;
+  } else if (attempt.searched > 0) {
+    attempt.quality = static_cast<double>(attempt.found) / attempt.searched;
+  }
+  attempt.median_depth_m = median(&depths_);
+  return attempt;
+}
+
+void Tracker::Impl::projectAll(const SE3& T_c_w) {
+  makeKeyframeViews(map_, T_c_w, &views_);
+  const ProjectionOptions projection{options_.image_margin_px};
+  visible_.clear();
+  for (PointSlot& slot : slots_) {
+    if (projectPoint(camera_, T_c_w, views_, projection, &slot)) visible_.push_back(&slot);
+  }
+}
+
+// Searches the slots and updates the pose by Gauss-Newton on the found ones. With
+// mark_inliers, found points that the robust fit rejected are marked not found.
+SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c_w, int radius_px,
+                            const RgbdFrame& frame, bool mark_inliers) {
+  PointSearchOptions search;
+  search.radius_px = radius_px;
+  search.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
+  search.patch_cache_tolerance = options_.patch_cache_tolerance;
+  searchPoints(slots, pyramid_, corners_, search);
+  observations_.clear();
+  std::vector<PointSlot*> found;
+  for (PointSlot* slot : slots) {
+    if (!slot->found) continue;
+    const double depth = options_.use_depth_in_pose ? depthAt(frame, slot->found_uv) : 0.0;
+    observations_.push_back({slot->point->p_w, slot->found_uv, slot->found_level, depth});
+    found.push_back(slot);
+  }
+  const PoseOptimizerResult fit =
+      optimisePose(camera_, T_c_w, observations_, poseOptions(), &inliers_);
+  if (!fit.ok) return T_c_w;
+  if (mark_inliers) {
+    for (size_t i = 0; i < found.size(); ++i) found[i]->found = inliers_[i] != 0;
+  }
+  return fit.T_c_w;
+}
+
+void Tracker::Impl::selectSubset(std::vector<PointSlot*>* slots, int max_count) {
+  if (static_cast<int>(slots->size()) <= max_count) return;
+  // Partial Fisher-Yates: the first max_count entries become a uniform random subset.
+  for (int i = 0; i < max_count; ++i) {
+    std::uniform_int_distribution<size_t> pick(static_cast<size_t>(i), slots->size() - 1);
+    std::swap((*slots)[static_cast<size_t>(i)], (*slots)[pick(rng_)]);
+  }
+  slots->resize(static_cast<size_t>(max_count));
+}
+
+PoseOptimizerOptions Tracker::Impl::poseOptions() const {
+  PoseOptimizerOptions pose;
+  pose.iterations = options_.gauss_newton_iterations;
+  pose.tukey_c = options_.tukey_c;
+  pose.min_robust_sigma = options_.min_robust_sigma;
+  pose.use_depth = options_.use_depth_in_pose;
+  pose.depth_sigma_coefficient = options_.depth_sigma_coefficient;
+  return pose;
+}
+
+double Tracker::Impl::depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const {
+  if (frame.depth.empty() || frame.depth.type() != CV_16UC1) return 0.0;
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  if (u < 0 || v < 0 || u >= frame.depth.cols || v >= frame.depth.rows) return 0.0;
+  const uint16_t raw = frame.depth.at<uint16_t>(v, u);
+  const double d = raw / frame.depth_scale;
+  if (raw == 0 || d < options_.keyframe_build.min_depth_m || d > options_.keyframe_build.max_depth_m) {
+    return 0.0;
+  }
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------
+// Keyframes
+
+std::vector<Measurement> Tracker::Impl::foundMeasurements(const RgbdFrame& frame) const {
+  std::vector<Measurement> measurements;
+  for (const PointSlot* slot : stage_) {
+    if (!slot->found) continue;
+    measurements.push_back({slot->point->id, slot->found_uv, slot->found_level,
+                            depthAt(frame, slot->found_uv)});
+  }
+  return measurements;
+}
+
+KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
+                                        std::vector<Measurement> measurements) {
+  KeyframeData data;
+  data.utime = frame.utime;
+  data.map_id = map_id_;
+  data.id = next_keyframe_id_++;
+  data.T_w_c = T_w_c;
+  data.grey = grey_.clone();
+  data.depth = frame.depth.empty() ? cv::Mat() : frame.depth.clone();
+  data.depth_scale = frame.depth_scale;
+  data.measurements = std::move(measurements);
+  std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
+  std::vector<NewPoint> points;
+  if (depthPointsAllowed(mode_, data.id)) {
+    points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
+                                   data.id * kPointsPerKeyframe);
+  }
+  map_.addKeyframe(std::move(keyframe));
+  for (const NewPoint& np : points) {
+    if (np.point.id - data.id * kPointsPerKeyframe >= kProvisionalPointsPerKeyframe) break;
+    addSlot(map_.addPoint(np.point));
+    map_.addMeasurement(data.id, np.measurement);
+    data.measurements.push_back(np.measurement);
+    data.new_points.push_back(np.point.data());
+  }
+  frames_since_keyframe_ = 0;
+  return data;
+}
+
+// ---------------------------------------------------------------------------------------
+// The replica
+
+// Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists.
+void Tracker::Impl::addSlot(MapPoint* point) {
+  const auto it = slot_index_.find(point->id);
+  if (it != slot_index_.end()) {
+    if (!initSlot(map_, camera_, point, &slots_[it->second])) removeSlot(point->id);
+    return;
+  }
+  PointSlot slot;
+  if (!initSlot(map_, camera_, point, &slot)) return;
+  slot_index_[point->id] = slots_.size();
+  slots_.push_back(slot);
+}
+
+void Tracker::Impl::removeSlot(PointId id) {
+  const auto it = slot_index_.find(id);
+  if (it == slot_index_.end()) return;
+  const size_t index = it->second;
+  slot_index_.erase(it);
+  if (index + 1 != slots_.size()) {
+    slots_[index] = slots_.back();
+    slot_index_[slots_[index].point->id] = index;
+  }
+  slots_.pop_back();
+}
+
+Tracker::UpdateStatus Tracker::Impl::applyMapUpdate(const MapUpdate& update) {
+  if (update.map_id != map_id_) return UpdateStatus::kForeignMap;
+  if (update.version <= version_) return UpdateStatus::kStale;
+  if (!update.is_snapshot && update.version != version_ + 1) return UpdateStatus::kMissingDelta;
+  bool unknown = false;
+  for (KeyframeId id : update.acked_keyframes) acked_.insert(id);
+  for (const KeyframePose& pose : update.keyframes) {
+    Keyframe* keyframe = map_.keyframe(pose.id);
+    if (keyframe) keyframe->T_w_c = pose.T_w_c;
+    else unknown = true;
+  }
+  if (update.is_snapshot) {
+    // Points of acknowledged keyframes that the snapshot no longer has were removed by the
+    // mapper; provisional points of keyframes it has not integrated yet stay.
+    std::unordered_set<PointId> kept;
+    for (const MapPointData& p : update.points) kept.insert(p.id);
+    std::vector<PointId> gone;
+    for (const auto& [id, point] : map_.points()) {
+      if (!kept.count(id) && acked_.count(point.source_keyframe)) gone.push_back(id);
+    }
+    for (PointId id : gone) {
+      removeSlot(id);
+      map_.removePoint(id);
+    }
+  }
+  for (const MapPointData& p : update.points) {
+    if (!map_.hasKeyframe(p.source_keyframe)) {
+      unknown = true;
+      continue;
+    }
+    MapPoint point;
+    point.id = p.id;
+    point.p_w = p.p_w;
+    point.source_keyframe = p.source_keyframe;
+    point.source_level = p.level;
+    point.source_uv = p.uv;
+    const MapPoint* before = map_.point(p.id);
+    const bool same_patch = before && before->source_keyframe == p.source_keyframe &&
+                            before->source_level == p.level && before->source_uv == p.uv;
+    MapPoint* stored = map_.addPoint(point);
+    const auto it = slot_index_.find(p.id);
+    if (same_patch && it != slot_index_.end()) continue;  // slot and patch cache stay valid
+    addSlot(stored);
+  }
+  for (PointId id : update.removed_points) {
+    removeSlot(id);
+    map_.removePoint(id);
+  }
+  version_ = update.version;
+  return unknown ? UpdateStatus::kUnknownKeyframe : UpdateStatus::kApplied;
+}
+
+// ---------------------------------------------------------------------------------------
+
+Tracker::Tracker(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode,
+                 int64_t map_id)
+    : impl_(std::make_unique<Impl>(camera, options, mode, map_id)) {}
+Tracker::~Tracker() = default;
+TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame); }
+Tracker::UpdateStatus Tracker::applyMapUpdate(const MapUpdate& update) {
+  return impl_->applyMapUpdate(update);
+}
+const Map& Tracker::map() const { return impl_->map(); }
+int64_t Tracker::mapVersion() const { return impl_->mapVersion(); }
+void Tracker::reset() { impl_->reset(); }
+
+}  // namespace rgbdslam

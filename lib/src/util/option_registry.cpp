@@ -1,0 +1,163 @@
+#include "rgbdslam/util/option_registry.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <opencv2/core.hpp>
+#include <set>
+#include <sstream>
+
+namespace rgbdslam {
+namespace {
+
+std::string formatDouble(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+Expected<double> parseDouble(const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || errno != 0 || !std::isfinite(v)) return Error{"'" + text + "' is not a number"};
+  return v;
+}
+
+// Text of a scalar node (numbers formatted back, strings as they are).
+Expected<std::string> nodeText(const cv::FileNode& node) {
+  if (node.isInt()) return std::to_string(static_cast<int>(node));
+  if (node.isReal()) {
+    std::ostringstream out;
+    out.precision(17);
+    out << static_cast<double>(node);
+    return out.str();
+  }
+  if (node.isString()) return static_cast<std::string>(node);
+  return Error{"is not a scalar"};
+}
+
+}  // namespace
+
+void OptionRegistry::bind(const std::string& section, const std::string& key, double* field,
+                          double min, double max, const std::string& unit, const std::string& help) {
+  const std::string name = section + "." + key;
+  entries_.push_back({section, key, unit, help, "number", formatDouble(*field),
+                      [=](const std::string& text) -> Status {
+                        auto v = parseDouble(text);
+                        if (!v) return Error{name + ": " + v.error()};
+                        if (*v < min || *v > max) return Error{name + ": " + text + " is outside [" + formatDouble(min) + ", " + formatDouble(max) + "]"};
+                        *field = *v;
+                        return {};
+                      },
+                      [=] { return formatDouble(*field); }});
+}
+
+void OptionRegistry::bind(const std::string& section, const std::string& key, int* field, int min,
+                          int max, const std::string& unit, const std::string& help) {
+  const std::string name = section + "." + key;
+  entries_.push_back({section, key, unit, help, "integer", std::to_string(*field),
+                      [=](const std::string& text) -> Status {
+                        auto v = parseDouble(text);
+                        if (!v || *v != std::floor(*v)) return Error{name + ": '" + text + "' is not a whole number"};
+                        if (*v < min || *v > max) return Error{name + ": " + text + " is outside [" + std::to_string(min) + ", " + std::to_string(max) + "]"};
+                        *field = static_cast<int>(*v);
+                        return {};
+                      },
+                      [=] { return std::to_string(*field); }});
+}
+
+void OptionRegistry::bind(const std::string& section, const std::string& key, bool* field,
+                          const std::string& help) {
+  const std::string name = section + "." + key;
+  entries_.push_back({section, key, "", help, "boolean", *field ? "true" : "false",
+                      [=](const std::string& text) -> Status {
+                        if (text == "true" || text == "1") *field = true;
+                        else if (text == "false" || text == "0") *field = false;
+                        else return Error{name + ": '" + text + "' is not true or false"};
+                        return {};
+                      },
+                      [=] { return std::string(*field ? "true" : "false"); }});
+}
+
+void OptionRegistry::bind(const std::string& section, const std::string& key, std::string* field,
+                          const std::vector<std::string>& choices, const std::string& help) {
+  const std::string name = section + "." + key;
+  std::string listed;
+  for (const auto& c : choices) listed += (listed.empty() ? "" : "|") + c;
+  entries_.push_back({section, key, listed, help, "choice", *field,
+                      [=](const std::string& text) -> Status {
+                        for (const auto& c : choices) {
+                          if (c == text) {
+                            *field = text;
+                            return {};
+                          }
+                        }
+                        return Error{name + ": '" + text + "' is not one of " + listed};
+                      },
+                      [=] { return *field; }});
+}
+
+OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const std::string& key) {
+  for (auto& e : entries_) {
+    if (e.section == section && e.key == key) return &e;
+  }
+  return nullptr;
+}
+
+Status OptionRegistry::load(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) return Error{path + ": configuration file not found"};
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(path, cv::FileStorage::READ)) return Error{path + ": cannot be read as YAML"};
+  } catch (const cv::Exception& e) {
+    return Error{path + ": not a valid OpenCV YAML file (" + e.msg + ")"};
+  }
+  std::set<std::string> sections;
+  for (const auto& e : entries_) sections.insert(e.section);
+  for (const cv::FileNode& section : fs.root()) {
+    const std::string section_name = section.name();
+    if (!sections.count(section_name)) return Error{path + ": unknown section '" + section_name + "'"};
+    if (!section.isMap()) return Error{path + ": section '" + section_name + "' must be a mapping"};
+    for (const cv::FileNode& node : section) {
+      Entry* entry = find(section_name, node.name());
+      if (!entry) return Error{path + ": unknown key '" + section_name + "." + node.name() + "'"};
+      auto text = nodeText(node);
+      if (!text) return Error{path + ": " + section_name + "." + node.name() + " " + text.error()};
+      if (Status s = entry->parse(*text); !s) return Error{path + ": " + s.error()};
+    }
+  }
+  return {};
+}
+
+Status OptionRegistry::set(const std::string& assignment) {
+  const size_t dot = assignment.find('.'), eq = assignment.find('=');
+  if (dot == std::string::npos || eq == std::string::npos || dot > eq) {
+    return Error{"'" + assignment + "' must look like section.key=value"};
+  }
+  Entry* entry = find(assignment.substr(0, dot), assignment.substr(dot + 1, eq - dot - 1));
+  if (!entry) return Error{"unknown option '" + assignment.substr(0, eq) + "'"};
+  return entry->parse(assignment.substr(eq + 1));
+}
+
+std::string OptionRegistry::describe() const {
+  std::ostringstream out;
+  for (const auto& e : entries_) {
+    out << "  " << e.section << "." << e.key << " = " << e.show();
+    if (!e.unit.empty()) out << " [" << e.unit << "]";
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string OptionRegistry::markdownTable() const {
+  std::ostringstream out;
+  out << "| option | unit | default | meaning |\n|---|---|---|---|\n";
+  for (const auto& e : entries_) {
+    out << "| `" << e.section << "." << e.key << "` | " << e.unit << " | " << e.default_text << " | " << e.help << " |\n";
+  }
+  return out.str();
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,172 @@
+#include "rgbd-slam/batch_runner.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "common/source_factory.h"
+#include "rgbdslam/camera/calibration_io.h"
+#include "rgbdslam/eval/trajectory_eval.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr long kProgressEveryFrames = 100;  // progress line period when not on a terminal
+
+bool hasPose(TrackResult::Status status) {
+  return status == TrackResult::Status::kInitialised || status == TrackResult::Status::kTracked ||
+         status == TrackResult::Status::kRelocalised;
+}
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  return values[static_cast<size_t>(q * (values.size() - 1))];
+}
+
+// Splits "a=1,b=2" into assignments; commas inside values are not supported.
+std::vector<std::string> splitAssignments(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+}  // namespace
+
+Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
+  BatchOptions o;
+  o.registry = std::make_unique<OptionRegistry>();
+  o.slam->bind(o.registry.get());
+  if (cli.has("config")) {
+    if (Status s = o.registry->load(cli.get("config")); !s) return Error{s.error()};
+  }
+  for (const std::string& assignment : splitAssignments(cli.get("set"))) {
+    if (Status s = o.registry->set(assignment); !s) return Error{"--set: " + s.error()};
+  }
+  if (cli.has("mode")) {
+    if (Status s = o.registry->set("slam.mode=" + cli.get("mode")); !s) return Error{"--mode: " + s.error()};
+  }
+  if (cli.has("print-config")) return o;
+  if (!cli.has("source")) return Error{"--source is required (see --help)"};
+  if (!cli.has("output")) return Error{"--output is required (see --help)"};
+  o.source = cli.get("source");
+  o.camera_path = cli.has("camera") ? cli.get("camera") : "";
+  o.output = cli.get("output");
+  o.deterministic = cli.has("deterministic");
+  o.quiet = cli.has("quiet");
+  o.groundtruth_path = cli.has("groundtruth") ? cli.get("groundtruth") : "";
+  auto max_frames = cli.getInt("max-frames");
+  if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
+  o.max_frames = *max_frames;
+  return o;
+}
+
+Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options) {
+  PinholeCamera camera;
+  std::optional<PinholeCamera> given;
+  if (!options.camera_path.empty()) {
+    auto loaded = loadCamera(options.camera_path);
+    if (!loaded) return Error{loaded.error()};
+    camera = *loaded;
+    given = camera;
+  } else {
+    auto synthetic = syntheticCamera(options.source);
+    if (!synthetic) return Error{"--camera is required for this source (" + synthetic.error() + ")"};
+    camera = *synthetic;
+  }
+  auto source = openSource(options.source, given);
+  if (!source) return Error{source.error()};
+  std::optional<Trajectory> groundtruth;
+  if (!options.groundtruth_path.empty()) {
+    auto read = readTumTrajectory(options.groundtruth_path);
+    if (!read) return Error{read.error()};
+    groundtruth = *read;
+  } else {
+    groundtruth = groundTruthFor(options.source);
+  }
+  return std::unique_ptr<BatchRunner>(
+      new BatchRunner(std::move(options), camera, std::move(*source), std::move(groundtruth)));
+}
+
+BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
+                         std::unique_ptr<FrameSource> source, std::optional<Trajectory> groundtruth)
+    : options_(std::move(options)), camera_(std::move(camera)), source_(std::move(source)),
+      groundtruth_(std::move(groundtruth)) {
+  std::cerr << "rgbd-slam: " << source_->describe() << ", camera " << camera_.name << ", "
+            << (options_.deterministic ? "deterministic" : "concurrent mapper") << "\n"
+            << "configuration:\n" << options_.registry->describe();
+  slam_ = std::make_unique<SlamSystem>(camera_, *options_.slam, options_.deterministic);
+}
+
+void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
+  const SlamStats stats = slam_->stats();
+  const bool tty = isatty(STDERR_FILENO);
+  if (options_.quiet || (!tty && !final_line && stats.frames % kProgressEveryFrames != 0)) return;
+  char line[200];
+  std::snprintf(line, sizeof(line), "frame %ld  keyframes %ld  lost %ld  points %d  %.1f ms",
+                stats.frames, stats.keyframes, stats.lost_frames, result.pose.points_tracked,
+                result.track_ms);
+  std::cerr << (tty ? "\r" : "") << line << (tty && !final_line ? "" : "\n") << std::flush;
+}
+
+int BatchRunner::run(const std::atomic<bool>& stop) {
+  Trajectory trajectory;
+  TrackResult last;
+  long frames = 0;
+  while (!stop && (options_.max_frames == 0 || frames < options_.max_frames)) {
+    FrameResult input = source_->next();
+    if (input.status == FrameResult::Status::kEnd) break;
+    if (input.status == FrameResult::Status::kFailed) {
+      std::cerr << "\nrgbd-slam: error: " << input.error << "\n";
+      ++bad_frames_;
+      break;
+    }
+    if (input.status == FrameResult::Status::kBadFrame) {
+      std::cerr << "\nrgbd-slam: error: " << input.error << " (frame skipped)\n";
+      ++bad_frames_;
+      continue;
+    }
+    ++frames;
+    last = slam_->process(input.frame);
+    track_ms_.push_back(last.track_ms);
+    if (last.status == TrackResult::Status::kBadFrame) {
+      std::cerr << "\nrgbd-slam: error: frame " << input.frame.seq << ": " << last.error << "\n";
+      ++bad_frames_;
+    }
+    if (hasPose(last.status)) trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
+    showProgress(last, false);
+  }
+  slam_->finish();
+  showProgress(last, true);
+  const Status written = writeTumTrajectory(options_.output, trajectory);
+  if (!written) std::cerr << "rgbd-slam: error: " << written.error() << "\n";
+  printSummary(trajectory);
+  return (!written || bad_frames_ > 0) ? 1 : 0;
+}
+
+void BatchRunner::printSummary(const Trajectory& trajectory) const {
+  const SlamStats stats = slam_->stats();
+  std::printf("frames %ld\nposes %zu\nkeyframes %ld\nmap_points %ld\nlost_frames %ld\nbad_frames %ld\n",
+              stats.frames, trajectory.size(), stats.keyframes, stats.points, stats.lost_frames, bad_frames_);
+  std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\n", percentile(track_ms_, 0.5), percentile(track_ms_, 0.95));
+  if (!groundtruth_) {
+    std::printf("ate_rmse_m unknown (no ground truth)\n");
+    return;
+  }
+  EvalOptions eval;
+  eval.num_frames = static_cast<size_t>(stats.frames);
+  auto result = evaluateTrajectory(*groundtruth_, trajectory, eval);
+  if (!result) {
+    std::printf("ate_rmse_m unknown (%s)\n", result.error().c_str());
+    return;
+  }
+  std::printf("%s", toKeyValueText(*result).c_str());
+}
+
+}  // namespace rgbdslam

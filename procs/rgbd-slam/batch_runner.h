@@ -1,0 +1,53 @@
+#pragma once
+// The rgbd-slam loop: read frames, run the SLAM system, write the trajectory, show
+// progress, and at the end evaluate against ground truth when there is one.
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "common/cli.h"
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/io/frame_source.h"
+#include "rgbdslam/io/trajectory_io.h"
+#include "rgbdslam/system/slam_system.h"
+
+namespace rgbdslam {
+
+struct BatchOptions {
+  std::string source;
+  std::string camera_path;                 // empty for synth: (the renderer's camera)
+  std::string output;                      // trajectory file
+  bool deterministic = false;
+  long max_frames = 0;                     // 0 = all
+  bool quiet = false;
+  std::string groundtruth_path;            // empty: the source's own
+  // On the heap so that moving BatchOptions keeps the registry's pointers into it valid.
+  std::unique_ptr<SlamOptions> slam = std::make_unique<SlamOptions>();
+  std::unique_ptr<OptionRegistry> registry;  // bound to *slam; for printing
+
+  static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
+};
+
+class BatchRunner {
+ public:
+  static Expected<std::unique_ptr<BatchRunner>> create(BatchOptions options);
+  // Returns the exit status: 0 done, 1 frames were bad or the trajectory could not be written.
+  int run(const std::atomic<bool>& stop);
+
+ private:
+  BatchRunner(BatchOptions options, PinholeCamera camera, std::unique_ptr<FrameSource> source,
+              std::optional<Trajectory> groundtruth);
+  void showProgress(const TrackResult& result, bool final_line);
+  void printSummary(const Trajectory& trajectory) const;
+
+  BatchOptions options_;
+  PinholeCamera camera_;
+  std::unique_ptr<FrameSource> source_;
+  std::optional<Trajectory> groundtruth_;
+  std::unique_ptr<SlamSystem> slam_;
+  std::vector<double> track_ms_;
+  long bad_frames_ = 0;
+};
+
+}  // namespace rgbdslam

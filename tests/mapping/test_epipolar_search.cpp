@@ -1,0 +1,83 @@
+// Epipolar search and triangulation: two keyframes of the noise-free synthetic room at their
+// exact poses, no depth; the triangulated points must lie on the rendered surface.
+#include "rgbdslam/mapping/epipolar_search.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "rgbdslam/io/synthetic_scene.h"
+
+namespace rgbdslam {
+namespace {
+
+TEST(TriangulateMidpoint, IntersectingRays) {
+  const Vec3 p(0.3, -0.2, 2.5), o_a(0, 0, 0), o_b(0.2, 0.05, 0);
+  const auto x = triangulateMidpoint(o_a, (p - o_a).normalized(), o_b, (p - o_b).normalized());
+  ASSERT_TRUE(x);
+  EXPECT_LT((*x - p).norm(), 1e-9);
+}
+
+TEST(TriangulateMidpoint, RejectsParallelAndBehind) {
+  const Vec3 d(0, 0, 1);
+  EXPECT_FALSE(triangulateMidpoint(Vec3::Zero(), d, Vec3(0.1, 0, 0), d));
+  const Vec3 p(0, 0, -2);  // behind both origins
+  EXPECT_FALSE(triangulateMidpoint(Vec3(0, 0, 0), (p - Vec3(0, 0, 0)).normalized() * -1.0,
+                                   Vec3(0.2, 0, 0), (Vec3(0.2, 0, 0) - p).normalized()));
+}
+
+// Keyframe from a rendered frame at its exact pose, without depth (as in mono mode).
+std::unique_ptr<Keyframe> keyframeOf(const SyntheticScene& scene, int frame, KeyframeId id) {
+  KeyframeData data;
+  data.id = id;
+  data.T_w_c = scene.groundTruthPose(frame);
+  data.grey = scene.render(frame).grey();
+  return makeKeyframe(data, KeyframeBuildOptions{});
+}
+
+// Smallest |z - true depth| over the 3x3 pixels around uv (corners sit on depth edges).
+double surfaceError(const cv::Mat& depth_m, const Eigen::Vector2d& uv, double z) {
+  double best = INFINITY;
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  for (int dv = -1; dv <= 1; ++dv) {
+    for (int du = -1; du <= 1; ++du) {
+      const float d = depth_m.at<float>(std::clamp(v + dv, 0, depth_m.rows - 1),
+                                        std::clamp(u + du, 0, depth_m.cols - 1));
+      if (std::isfinite(d)) best = std::min(best, std::abs(z - d));
+    }
+  }
+  return best;
+}
+
+TEST(EpipolarSearch, TriangulatedPointsLieOnTheSurface) {
+  const SyntheticScene scene(*parseSyntheticSpec("room,frames=300,noise_sigma=0,depth_sigma=0,quantise=0"));
+  const int frame_a = 225, frame_b = 240;  // 18 cm apart
+  ASSERT_GT((scene.groundTruthPose(frame_a).translation() - scene.groundTruthPose(frame_b).translation()).norm(), 0.1);
+  const auto older = keyframeOf(scene, frame_a, 0);
+  const auto newer = keyframeOf(scene, frame_b, 1);
+  EpipolarStats stats;
+  const auto points = epipolarSearch(*newer, *older, scene.camera(), EpipolarOptions{}, 1000, &stats);
+  const cv::Mat true_depth = scene.render(frame_b).depthMetres();
+  std::vector<double> errors;
+  for (const EpipolarPoint& ep : points) {
+    EXPECT_EQ(ep.point.source_keyframe, 1);
+    EXPECT_EQ(ep.in_keyframe.point_id, ep.point.id);
+    const double z = (newer->T_c_w() * ep.point.p_w).z();
+    errors.push_back(surfaceError(true_depth, ep.point.source_uv, z));
+  }
+  std::sort(errors.begin(), errors.end());
+  ASSERT_GE(errors.size(), 50u) << "tried " << stats.tried << ", no candidate " << stats.no_candidate
+                                << ", no match " << stats.no_match << ", ambiguous " << stats.ambiguous
+                                << ", subpixel " << stats.subpixel_failed << ", triangulation "
+                                << stats.bad_triangulation;
+  const double median = errors[errors.size() / 2];
+  const double p90 = errors[errors.size() * 9 / 10];
+  std::printf("epipolar: %zu points of %d tried; surface error median %.4f m, 90%% %.4f m, max %.3f m\n",
+              errors.size(), stats.tried, median, p90, errors.back());
+  EXPECT_LT(median, 0.02);
+  EXPECT_LT(p90, 0.05);
+}
+
+}  // namespace
+}  // namespace rgbdslam

@@ -1,0 +1,289 @@
+// Mapper: in-order integration, culling, interruption, determinism, and the accuracy of the
+// keyframe poses after local + global BA from tracker-like input in the three modes.
+#include "rgbdslam/mapping/mapper.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "rgbdslam/geometry/alignment.h"
+#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/mapping/point_creation.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr double kDegree = M_PI / 180.0;
+
+// Tracker-like keyframes of the synthetic room: poses = ground truth perturbed (except
+// keyframe 0, the gauge), provisional points from measured depth, and measurements of the
+// earlier points = ground-truth projection + 0.5 px noise with the rendered depth there.
+struct Sequence {
+  PinholeCamera camera;
+  std::vector<SE3> truth;             // per keyframe
+  std::vector<KeyframeData> keyframes;
+};
+
+struct TruePoint {
+  PointId id;
+  Vec3 p_w;
+  int level;
+};
+
+// Exact depth at uv of the noise-free frame (nullopt at holes and depth edges).
+std::optional<double> exactDepth(const cv::Mat& depth_m, const Eigen::Vector2d& uv) {
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  if (u < 1 || v < 1 || u >= depth_m.cols - 1 || v >= depth_m.rows - 1) return std::nullopt;
+  const float d = depth_m.at<float>(v, u);
+  if (!std::isfinite(d)) return std::nullopt;
+  return d;
+}
+
+Sequence makeSequence(SlamMode mode, int num_keyframes, int step = 15) {
+  const SyntheticScene noisy(*parseSyntheticSpec("room,frames=300"));
+  const SyntheticScene exact(*parseSyntheticSpec("room,frames=300,noise_sigma=0,depth_sigma=0,quantise=0"));
+  Sequence seq;
+  seq.camera = noisy.camera();
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<TruePoint> points;
+  for (int k = 0; k < num_keyframes; ++k) {
+    const int frame = k * step;
+    const SE3 T_true = noisy.groundTruthPose(frame);
+    const RgbdFrame rgbd = noisy.render(frame);
+    const cv::Mat true_depth = exact.render(frame).depthMetres();
+    const cv::Mat noisy_depth = rgbd.depthMetres();
+    KeyframeData data;
+    data.utime = rgbd.utime, data.map_id = 1, data.id = k;
+    data.grey = rgbd.grey(), data.depth = rgbd.depth, data.depth_scale = rgbd.depth_scale;
+    data.T_w_c = T_true;
+    if (k > 0) {
+      const Vec3 dt(gauss(rng), gauss(rng), gauss(rng)), dw(gauss(rng), gauss(rng), gauss(rng));
+      data.T_w_c = SE3(Mat3(expSO3(dw.normalized() * kDegree) * T_true.rotationMatrix()),
+                       Vec3(T_true.translation() + dt.normalized() * 0.02));
+    }
+    const SE3 T_c_w = T_true.inverse();
+    for (const TruePoint& p : points) {
+      const Vec3 p_c = T_c_w * p.p_w;
+      const auto uv = seq.camera.project(p_c);
+      if (!uv || !seq.camera.inImage(*uv, 10.0)) continue;
+      const auto z = exactDepth(true_depth, *uv);
+      if (!z || std::abs(*z - p_c.z()) > 0.02 * p_c.z()) continue;  // occluded
+      Measurement m{p.id, *uv + 0.5 * Eigen::Vector2d(gauss(rng), gauss(rng)), p.level, 0.0};
+      const auto d = exactDepth(noisy_depth, m.uv);
+      m.depth = d ? *d : 0.0;
+      data.measurements.push_back(m);
+    }
+    if (depthPointsAllowed(mode, k)) {
+      auto kf = makeKeyframe(data, KeyframeBuildOptions{});
+      for (const NewPoint& np : createPointsFromDepth(*kf, seq.camera, DepthPointOptions{}, k * kPointsPerKeyframe)) {
+        const auto z = exactDepth(true_depth, np.point.source_uv);
+        if (!z) continue;
+        data.new_points.push_back(np.point.data());
+        data.measurements.push_back(np.measurement);
+        points.push_back({np.point.id, T_true * seq.camera.unproject(np.point.source_uv, *z), np.point.source_level});
+      }
+    }
+    seq.truth.push_back(T_true);
+    seq.keyframes.push_back(std::move(data));
+  }
+  return seq;
+}
+
+struct PoseErrors {
+  double max_position_m = 0, rms_position_m = 0, max_rotation_deg = 0;
+  double similarity_rms_m = 0, scale = 1;  // after aligning the centres with a similarity
+};
+
+PoseErrors poseErrors(const Map& map, const std::vector<SE3>& truth) {
+  PoseErrors e;
+  for (const auto& [id, kf] : map.keyframes()) {
+    const SE3 delta = truth[id].inverse() * kf->T_w_c;
+    const double dp = (kf->T_w_c.translation() - truth[id].translation()).norm();
+    e.max_position_m = std::max(e.max_position_m, dp);
+    e.rms_position_m += dp * dp;
+    e.max_rotation_deg = std::max(e.max_rotation_deg, logSO3(delta.rotationMatrix()).norm() / kDegree);
+  }
+  e.rms_position_m = std::sqrt(e.rms_position_m / std::max<size_t>(1, map.numKeyframes()));
+  std::vector<Vec3> estimated, actual;
+  for (const auto& [id, kf] : map.keyframes()) {
+    estimated.push_back(kf->T_w_c.translation());
+    actual.push_back(truth[id].translation());
+  }
+  if (const auto S = alignPoints(estimated, actual, AlignmentKind::kSimilarity)) {
+    e.scale = S->scale;
+    for (size_t i = 0; i < estimated.size(); ++i) e.similarity_rms_m += (*S * estimated[i] - actual[i]).squaredNorm();
+    e.similarity_rms_m = std::sqrt(e.similarity_rms_m / estimated.size());
+  }
+  return e;
+}
+
+int refineUntilDone(Mapper* mapper, int max_steps = 60) {
+  int steps = 0;
+  while (steps < max_steps && mapper->refine()) ++steps;
+  return steps;
+}
+
+PoseErrors runMode(SlamMode mode, int num_keyframes, MapUpdate* snapshot = nullptr) {
+  const Sequence seq = makeSequence(mode, num_keyframes);
+  Mapper mapper(seq.camera, MapperOptions{}, mode);
+  for (const KeyframeData& kf : seq.keyframes) {
+    const MapperResult r = mapper.addKeyframe(kf);
+    EXPECT_EQ(r.status, MapperResult::Status::kIntegrated) << r.error;
+    EXPECT_EQ(r.update.version, mapper.version());
+    EXPECT_EQ(r.update.acked_keyframes.size(), static_cast<size_t>(kf.id + 1));
+  }
+  const int steps = refineUntilDone(&mapper);
+  EXPECT_LT(steps, 60) << "refine did not converge";
+  EXPECT_FALSE(mapper.refine());
+  const PoseErrors e = poseErrors(mapper.map(), seq.truth);
+  std::printf("%-10s keyframes %d, points %zu, refine steps %d: position max %.4f m rms %.4f m, rotation max %.3f deg; similarity-aligned rms %.4f m, scale %.4f\n",
+              slamModeName(mode), num_keyframes, mapper.map().numPoints(), steps, e.max_position_m,
+              e.rms_position_m, e.max_rotation_deg, e.similarity_rms_m, e.scale);
+  if (snapshot) *snapshot = mapper.snapshot();
+  return e;
+}
+
+TEST(Mapper, DepthBaRecoversKeyframePoses) {
+  const PoseErrors e = runMode(SlamMode::kDepthBa, 10);
+  EXPECT_LT(e.max_position_m, 0.005);
+  EXPECT_LT(e.max_rotation_deg, 0.3);
+}
+
+TEST(Mapper, MonoIsWorstAndDepthModesRecoverPoses) {
+  const PoseErrors depth_ba = runMode(SlamMode::kDepthBa, 10);
+  const PoseErrors depth_init = runMode(SlamMode::kDepthInit, 10);
+  const PoseErrors mono = runMode(SlamMode::kMono, 10);
+  // The input poses are 2 cm / 1 deg off. depth-init (depth points, 2-D BA) improves on that;
+  // mono sees keyframe 0's points only at the start and must triangulate the rest, so it
+  // may only stay near it (measured: depth-ba 2.1 mm, depth-init 1.9 mm, mono 18 mm rms).
+  // Over ten well-textured keyframes with dense depth points, 2-D BA is as good as depth BA:
+  // the two differ by tenths of a millimetre either way, so their order is not asserted
+  // here. Depth residuals pay off against scale drift over long runs, which the
+  // corridor (Table I) is meant to show.
+  EXPECT_LT(depth_ba.max_position_m, 0.005);
+  EXPECT_LT(depth_init.max_position_m, 0.005);
+  EXPECT_LT(mono.rms_position_m, 0.03);
+  EXPECT_LT(depth_ba.rms_position_m, mono.rms_position_m);
+  EXPECT_LT(depth_init.rms_position_m, mono.rms_position_m);
+}
+
+TEST(Mapper, IntegratesInIdOrderOnly) {
+  const Sequence seq = makeSequence(SlamMode::kDepthBa, 3);
+  Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+  EXPECT_EQ(mapper.addKeyframe(seq.keyframes[1]).status, MapperResult::Status::kOutOfOrder);
+  EXPECT_EQ(mapper.map().numKeyframes(), 0u);
+  MapperResult r = mapper.addKeyframe(seq.keyframes[0]);
+  ASSERT_EQ(r.status, MapperResult::Status::kIntegrated);
+  EXPECT_EQ(r.update.version, 1);
+  EXPECT_GT(r.update.points.size(), 100u);
+  const size_t points = mapper.map().numPoints();
+  r = mapper.addKeyframe(seq.keyframes[0]);
+  EXPECT_EQ(r.status, MapperResult::Status::kDuplicate);
+  EXPECT_EQ(r.update.version, 1);
+  EXPECT_EQ(r.update.acked_keyframes, std::vector<KeyframeId>{0});
+  EXPECT_EQ(mapper.map().numPoints(), points);
+  r = mapper.addKeyframe(seq.keyframes[2]);
+  EXPECT_EQ(r.status, MapperResult::Status::kOutOfOrder);
+  EXPECT_EQ(mapper.version(), 1);
+  EXPECT_EQ(mapper.addKeyframe(seq.keyframes[1]).status, MapperResult::Status::kIntegrated);
+  r = mapper.addKeyframe(seq.keyframes[2]);
+  EXPECT_EQ(r.status, MapperResult::Status::kIntegrated);
+  EXPECT_EQ(r.update.acked_keyframes, (std::vector<KeyframeId>{0, 1, 2}));
+  EXPECT_EQ(r.update.version, 3);
+  KeyframeData foreign = seq.keyframes[2];
+  foreign.map_id = 99, foreign.id = 3;
+  r = mapper.addKeyframe(foreign);
+  EXPECT_EQ(r.status, MapperResult::Status::kForeignMap);
+  EXPECT_FALSE(r.error.empty());
+  EXPECT_EQ(mapper.map().numKeyframes(), 3u);
+  const MapUpdate snap = mapper.snapshot();
+  EXPECT_TRUE(snap.is_snapshot);
+  EXPECT_EQ(snap.version, mapper.version());
+  EXPECT_EQ(snap.keyframes.size(), 3u);
+  EXPECT_EQ(snap.points.size(), mapper.map().numPoints());
+}
+
+TEST(Mapper, DropsMeasurementsOfUnknownPoints) {
+  Sequence seq = makeSequence(SlamMode::kDepthBa, 2);
+  seq.keyframes[1].measurements.push_back(Measurement{123456789, Eigen::Vector2d(100, 100), 0, 0.0});
+  Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+  ASSERT_EQ(mapper.addKeyframe(seq.keyframes[0]).status, MapperResult::Status::kIntegrated);
+  const MapperResult r = mapper.addKeyframe(seq.keyframes[1]);
+  EXPECT_EQ(r.status, MapperResult::Status::kIntegrated);
+  EXPECT_EQ(r.dropped_measurements, 1);
+  EXPECT_FALSE(mapper.map().point(123456789));
+}
+
+TEST(Mapper, CullsAPointWhoseMeasurementsAreGrossOutliers) {
+  Sequence seq = makeSequence(SlamMode::kDepthBa, 4);
+  // A provisional point of keyframe 1 measured at unrelated pixels in keyframes 1-3.
+  const PointId bad = 1 * kPointsPerKeyframe + 99999;
+  const Eigen::Vector2d pixels[] = {{100, 100}, {520, 400}, {300, 60}};
+  MapPointData p;
+  p.id = bad, p.source_keyframe = 1, p.uv = pixels[0], p.level = 0;
+  p.p_w = seq.keyframes[1].T_w_c * seq.camera.unproject(pixels[0], 2.0);
+  seq.keyframes[1].new_points.push_back(p);
+  for (int k = 1; k <= 3; ++k) seq.keyframes[k].measurements.push_back(Measurement{bad, pixels[k - 1], 0, 0.0});
+  Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+  for (const auto& kf : seq.keyframes) ASSERT_EQ(mapper.addKeyframe(kf).status, MapperResult::Status::kIntegrated);
+  EXPECT_EQ(mapper.map().observers(bad).size(), 3u);
+  std::vector<PointId> removed;
+  for (int i = 0; i < 60; ++i) {
+    const auto update = mapper.refine();
+    if (!update) break;
+    removed.insert(removed.end(), update->removed_points.begin(), update->removed_points.end());
+  }
+  EXPECT_FALSE(mapper.map().point(bad));
+  EXPECT_NE(std::find(removed.begin(), removed.end(), bad), removed.end());
+  // Good points survive: most of keyframe 0's points are still there.
+  EXPECT_GT(mapper.map().numPoints(), 300u);
+}
+
+TEST(Mapper, RefineReturnsPromptlyWhenInterrupted) {
+  const Sequence seq = makeSequence(SlamMode::kDepthBa, 6);
+  MapperOptions options;
+  options.global_ba_every = 1000;  // keep the work for refine()
+  Mapper mapper(seq.camera, options, SlamMode::kDepthBa);
+  for (const auto& kf : seq.keyframes) ASSERT_EQ(mapper.addKeyframe(kf).status, MapperResult::Status::kIntegrated);
+  std::atomic<bool> interrupt{true};
+  auto start = std::chrono::steady_clock::now();
+  mapper.refine(&interrupt);
+  const double ms_preset = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(ms_preset, 50.0);
+  interrupt = false;
+  std::thread setter([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    interrupt = true;
+  });
+  start = std::chrono::steady_clock::now();
+  mapper.refine(&interrupt);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  setter.join();
+  EXPECT_LT(ms, 200.0);
+  // The interrupted work is resumed by later calls, which converge.
+  EXPECT_LT(refineUntilDone(&mapper), 60);
+}
+
+TEST(Mapper, IsDeterministic) {
+  MapUpdate a, b;
+  runMode(SlamMode::kDepthBa, 4, &a);
+  runMode(SlamMode::kDepthBa, 4, &b);
+  ASSERT_EQ(a.points.size(), b.points.size());
+  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
+  for (size_t i = 0; i < a.points.size(); ++i) {
+    EXPECT_EQ(a.points[i].id, b.points[i].id);
+    EXPECT_EQ(a.points[i].p_w, b.points[i].p_w);
+  }
+  for (size_t i = 0; i < a.keyframes.size(); ++i) {
+    EXPECT_EQ(a.keyframes[i].T_w_c.matrix(), b.keyframes[i].T_w_c.matrix());
+  }
+  EXPECT_EQ(a.version, b.version);
+}
+
+}  // namespace
+}  // namespace rgbdslam

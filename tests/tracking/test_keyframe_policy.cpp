@@ -1,0 +1,66 @@
+#include "rgbdslam/tracking/keyframe_policy.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rgbdslam {
+namespace {
+
+class KeyframePolicyTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    auto keyframe = std::make_unique<Keyframe>();
+    keyframe->id = 0;
+    map_.addKeyframe(std::move(keyframe));
+    input_.tracking_good = true;
+    input_.frames_since_keyframe = options_.min_frames_between_keyframes;
+    input_.median_depth_m = 2.0;  // keyframe distance threshold 0.2 m
+  }
+  bool decide(const SE3& T_w_c) {
+    input_.T_w_c = T_w_c;
+    return shouldAddKeyframe(map_, input_, options_);
+  }
+  static SE3 translated(double x) { return SE3(Mat3::Identity(), Vec3(x, 0, 0)); }
+  static SE3 rotated(double deg) { return SE3(expSO3(Vec3(0, deg * M_PI / 180.0, 0)), Vec3::Zero()); }
+
+  Map map_;
+  KeyframePolicyOptions options_;
+  KeyframePolicyInput input_;
+};
+
+TEST_F(KeyframePolicyTest, DistanceRelativeToSceneDepth) {
+  EXPECT_FALSE(decide(translated(0.15)));
+  EXPECT_TRUE(decide(translated(0.25)));
+  input_.median_depth_m = 4.0;  // now 0.4 m is needed
+  EXPECT_FALSE(decide(translated(0.25)));
+}
+
+TEST_F(KeyframePolicyTest, Rotation) {
+  EXPECT_FALSE(decide(rotated(10.0)));
+  EXPECT_TRUE(decide(rotated(20.0)));
+  options_.angle_deg = 25.0;
+  EXPECT_FALSE(decide(rotated(20.0)));
+}
+
+TEST_F(KeyframePolicyTest, NeedsGoodTrackingAndEnoughFrames) {
+  input_.frames_since_keyframe = options_.min_frames_between_keyframes - 1;
+  EXPECT_FALSE(decide(translated(1.0)));
+  input_.frames_since_keyframe = options_.min_frames_between_keyframes;
+  input_.tracking_good = false;
+  EXPECT_FALSE(decide(translated(1.0)));
+  input_.tracking_good = true;
+  EXPECT_TRUE(decide(translated(1.0)));
+}
+
+TEST_F(KeyframePolicyTest, AnyCoveringKeyframeSuppresses) {
+  auto second = std::make_unique<Keyframe>();
+  second->id = 1;
+  second->T_w_c = translated(1.0);
+  map_.addKeyframe(std::move(second));
+  EXPECT_FALSE(decide(translated(0.9)));
+  EXPECT_TRUE(decide(translated(0.5)));
+}
+
+}  // namespace
+}  // namespace rgbdslam

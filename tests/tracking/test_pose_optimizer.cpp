@@ -1,0 +1,112 @@
+#include "rgbdslam/tracking/pose_optimizer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace rgbdslam {
+namespace {
+
+struct Problem {
+  PinholeCamera camera;
+  SE3 T_c_w_true;
+  std::vector<PoseObservation> observations;
+};
+
+// Points 1-4 m in front of a camera at a general pose, seen exactly (uv and depth).
+Problem makeProblem(int n, unsigned seed) {
+  Problem problem;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), depth(1.0, 4.0);
+  Vec6 xi;
+  xi << 0.3, -0.2, 0.5, 0.1, -0.3, 0.2;
+  problem.T_c_w_true = SE3::exp(xi);
+  const SE3 T_w_c = problem.T_c_w_true.inverse();
+  while (static_cast<int>(problem.observations.size()) < n) {
+    const Eigen::Vector2d uv(320 + 300 * unit(rng), 240 + 220 * unit(rng));
+    const double z = depth(rng);
+    const Vec3 p_w = T_w_c * problem.camera.unproject(uv, z);
+    problem.observations.push_back({p_w, uv, static_cast<int>(problem.observations.size() % 4), z});
+  }
+  return problem;
+}
+
+SE3 perturbed(const SE3& T) {
+  Vec6 delta;
+  delta << 0.05, -0.03, 0.04, 0.02, -0.03, 0.015;  // 7 cm and about 2.5 degrees
+  return SE3::exp(delta) * T;
+}
+
+double translationError(const SE3& a, const SE3& b) {
+  return (a.inverse().translation() - b.inverse().translation()).norm();
+}
+double rotationError(const SE3& a, const SE3& b) {
+  return a.rotation().angularDistance(b.rotation());
+}
+
+TEST(PoseOptimizer, RecoversPerturbationFromExactCorrespondences) {
+  const Problem problem = makeProblem(100, 1);
+  for (bool use_depth : {false, true}) {
+    PoseOptimizerOptions options;
+    options.use_depth = use_depth;
+    const PoseOptimizerResult result = optimisePose(
+        problem.camera, perturbed(problem.T_c_w_true), problem.observations, options);
+    ASSERT_TRUE(result.ok) << "use_depth " << use_depth;
+    EXPECT_LT(translationError(result.T_c_w, problem.T_c_w_true), 1e-6) << "use_depth " << use_depth;
+    EXPECT_LT(rotationError(result.T_c_w, problem.T_c_w_true), 1e-7) << "use_depth " << use_depth;
+    EXPECT_EQ(result.inliers_2d, 100);
+    EXPECT_EQ(result.inliers_depth, use_depth ? 100 : 0);
+  }
+}
+
+TEST(PoseOptimizer, IgnoresTwentyPercentGrossOutliers) {
+  Problem problem = makeProblem(200, 2);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> offset(20.0, 60.0);
+  std::bernoulli_distribution sign(0.5);
+  std::vector<bool> outlier(problem.observations.size(), false);
+  for (size_t i = 0; i < problem.observations.size(); i += 5) {
+    PoseObservation& obs = problem.observations[i];
+    obs.uv += Eigen::Vector2d(sign(rng) ? offset(rng) : -offset(rng), sign(rng) ? offset(rng) : -offset(rng));
+    obs.depth *= 1.3;  // a gross depth error too
+    outlier[i] = true;
+  }
+  // Small noise on the inliers (0.3 px, sub-pixel matching).
+  std::normal_distribution<double> noise(0.0, 0.3);
+  for (size_t i = 0; i < problem.observations.size(); ++i) {
+    if (!outlier[i]) problem.observations[i].uv += Eigen::Vector2d(noise(rng), noise(rng));
+  }
+  for (bool use_depth : {false, true}) {
+    PoseOptimizerOptions options;
+    options.use_depth = use_depth;
+    std::vector<uint8_t> inlier;
+    const PoseOptimizerResult result = optimisePose(
+        problem.camera, perturbed(problem.T_c_w_true), problem.observations, options, &inlier);
+    ASSERT_TRUE(result.ok);
+    EXPECT_LT(translationError(result.T_c_w, problem.T_c_w_true), 5e-3) << "use_depth " << use_depth;
+    EXPECT_LT(rotationError(result.T_c_w, problem.T_c_w_true), 2e-3) << "use_depth " << use_depth;
+    int outliers_kept = 0;
+    for (size_t i = 0; i < inlier.size(); ++i) outliers_kept += outlier[i] && inlier[i];
+    EXPECT_EQ(outliers_kept, 0) << "use_depth " << use_depth;
+  }
+}
+
+TEST(PoseOptimizer, TooFewObservationsIsNotOk) {
+  const Problem problem = makeProblem(2, 4);
+  const PoseOptimizerResult result =
+      optimisePose(problem.camera, problem.T_c_w_true, problem.observations, {});
+  EXPECT_FALSE(result.ok);
+}
+
+TEST(PoseOptimizer, TukeyWeightAndRobustSigma) {
+  EXPECT_DOUBLE_EQ(tukeyWeight(0.0, 4.0), 1.0);
+  EXPECT_DOUBLE_EQ(tukeyWeight(2.0, 4.0), 0.25);
+  EXPECT_DOUBLE_EQ(tukeyWeight(5.0, 4.0), 0.0);
+  std::vector<double> e2{1.0, 4.0, 9.0};
+  EXPECT_NEAR(robustSigmaSquared(&e2, 0.1), 1.4826 * 1.4826 * 4.0, 1e-9);
+  std::vector<double> tiny{1e-6, 1e-6, 1e-6};
+  EXPECT_DOUBLE_EQ(robustSigmaSquared(&tiny, 0.5), 0.25);
+}
+
+}  // namespace
+}  // namespace rgbdslam

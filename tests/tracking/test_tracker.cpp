@@ -1,0 +1,360 @@
+#include "rgbdslam/tracking/tracker.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "rgbdslam/camera/calibration_io.h"
+#include "rgbdslam/eval/trajectory_eval.h"
+#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/io/tum_dataset.h"
+#include "test_support.h"
+
+namespace rgbdslam {
+namespace {
+
+using Status = TrackResult::Status;
+
+std::string sourceDir() {
+  if (const char* dir = std::getenv("RGBDSLAM_SOURCE_DIR")) return dir;
+  return std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string();
+}
+
+bool hasPose(Status status) {
+  return status == Status::kInitialised || status == Status::kTracked ||
+         status == Status::kRelocalised;
+}
+
+const SyntheticScene& room() {
+  static const SyntheticScene scene(*parseSyntheticSpec("room,frames=300"));
+  return scene;
+}
+
+// The room's frames, rendered once for all tests.
+const RgbdFrame& roomFrame(size_t i) {
+  static std::vector<RgbdFrame> frames = [] {
+    std::vector<RgbdFrame> all(room().numFrames());
+    for (size_t k = 0; k < all.size(); ++k) all[k] = room().render(k);
+    return all;
+  }();
+  return frames[i];
+}
+
+double positionError(const SE3& T_w_c_est, size_t frame) {
+  // Keyframe 0 is the world: compare in the first camera's frame.
+  const SE3 T_c0_c = room().groundTruthPose(0).inverse() * room().groundTruthPose(frame);
+  return (T_c0_c.translation() - T_w_c_est.translation()).norm();
+}
+
+TEST(Tracker, TracksSyntheticRoomWithoutMapper) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Trajectory estimate;
+  int not_tracked = 0, keyframes = 0;
+  std::vector<double> times;
+  for (size_t i = 0; i < room().numFrames(); ++i) {
+    const TrackResult result = tracker.track(roomFrame(i));
+    if (!hasPose(result.status)) {
+      ++not_tracked;
+      ADD_FAILURE() << "frame " << i << " status " << static_cast<int>(result.status) << " "
+                    << result.error;
+      continue;
+    }
+    if (i > 0) {
+      EXPECT_EQ(result.status, Status::kTracked) << "frame " << i;
+    }
+    EXPECT_EQ(result.pose.state, TrackingState::kTracking) << "frame " << i;
+    if (result.new_keyframe) ++keyframes;
+    times.push_back(result.track_ms);
+    estimate.push_back({roomFrame(i).utime * 1e-6, result.pose.T_w_c});
+  }
+  EXPECT_EQ(not_tracked, 0);
+  const auto eval = evaluateTrajectory(room().groundTruth(), estimate, EvalOptions{});
+  ASSERT_TRUE(eval.ok()) << eval.error();
+  std::sort(times.begin(), times.end());
+  std::printf("synthetic room, tracker only: ATE rmse %.4f m max %.4f m, %d keyframes, %zu points, "
+              "median %.2f ms\n",
+              eval->ate_m.rmse, eval->ate_m.max, keyframes, tracker.map().numPoints(),
+              times[times.size() / 2]);
+  EXPECT_LT(eval->ate_m.rmse, 0.02);
+  EXPECT_GT(keyframes, 2);
+}
+
+TEST(Tracker, RejectsBadFramesAndInitialisesFromDepth) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  RgbdFrame empty;
+  EXPECT_EQ(tracker.track(empty).status, Status::kBadFrame);
+  RgbdFrame small = roomFrame(0);
+  small.colour = cv::Mat(240, 320, CV_8UC3, cv::Scalar::all(0));
+  const TrackResult wrong_size = tracker.track(small);
+  EXPECT_EQ(wrong_size.status, Status::kBadFrame);
+  EXPECT_FALSE(wrong_size.error.empty());
+  RgbdFrame no_depth = roomFrame(0);
+  no_depth.depth = cv::Mat();
+  const TrackResult not_initialised = tracker.track(no_depth);
+  EXPECT_EQ(not_initialised.status, Status::kBadFrame);
+  EXPECT_NE(not_initialised.error.find("no depth to initialise"), std::string::npos);
+  EXPECT_EQ(not_initialised.pose.state, TrackingState::kInitialising);
+
+  const TrackResult first = tracker.track(roomFrame(0));
+  ASSERT_EQ(first.status, Status::kInitialised);
+  ASSERT_TRUE(first.new_keyframe);
+  const KeyframeData& kf = *first.new_keyframe;
+  EXPECT_EQ(kf.id, 0);
+  EXPECT_EQ(kf.map_id, 1);
+  EXPECT_GT(kf.new_points.size(), 100u);
+  EXPECT_EQ(kf.measurements.size(), kf.new_points.size());
+  for (const Measurement& m : kf.measurements) {
+    EXPECT_GT(m.depth, 0.0);
+    EXPECT_LT(m.point_id, kPointsPerKeyframe / 2);
+  }
+  EXPECT_EQ(tracker.map().numPoints(), kf.new_points.size());
+  EXPECT_EQ(tracker.map().numKeyframes(), 1u);
+}
+
+TEST(Tracker, KeyframesGetIdsMeasurementsAndProvisionalPoints) {
+  TrackerOptions options;
+  options.min_frames_between_keyframes = 5;
+  Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 7);
+  KeyframeId expected_id = 0;
+  int last_keyframe_frame = 0;
+  for (size_t i = 0; i < 120; ++i) {
+    const TrackResult result = tracker.track(roomFrame(i));
+    if (!result.new_keyframe) continue;
+    const KeyframeData& kf = *result.new_keyframe;
+    EXPECT_EQ(kf.id, expected_id++);
+    EXPECT_EQ(kf.map_id, 7);
+    if (kf.id == 0) continue;
+    EXPECT_GE(static_cast<int>(i) - last_keyframe_frame, options.min_frames_between_keyframes);
+    last_keyframe_frame = static_cast<int>(i);
+    const size_t tracked = kf.measurements.size() - kf.new_points.size();
+    EXPECT_GT(tracked, 50u);
+    for (const MapPointData& p : kf.new_points) {
+      EXPECT_EQ(p.source_keyframe, kf.id);
+      EXPECT_GE(p.id, kf.id * kPointsPerKeyframe);
+      EXPECT_LT(p.id, kf.id * kPointsPerKeyframe + kPointsPerKeyframe / 2);
+      EXPECT_NE(tracker.map().point(p.id), nullptr);
+    }
+  }
+  EXPECT_GT(expected_id, 2);
+  // Mono mode: no points from depth after keyframe 0.
+  Tracker mono(room().camera(), options, SlamMode::kMono, 7);
+  for (size_t i = 0; i < 120; ++i) {
+    const TrackResult result = mono.track(roomFrame(i));
+    if (result.new_keyframe && result.new_keyframe->id > 0) {
+      EXPECT_TRUE(result.new_keyframe->new_points.empty());
+    }
+  }
+}
+
+// Feeds frames first..last (inclusive) and returns the last result.
+TrackResult feed(Tracker* tracker, size_t first, size_t last) {
+  TrackResult result;
+  for (size_t i = first; i <= last; ++i) result = tracker->track(roomFrame(i));
+  return result;
+}
+
+// Frames 150 -> 250 skip 3.3 s: 0.7 m and 30 degrees. The tracker may follow the jump
+// directly (rotation from the small blurry images, wide coarse search) or lose track and
+// relocalise; either way its pose must be right within a few frames and never wrong while
+// it claims to track.
+TEST(Tracker, RecoversFromAJump) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+  int first_good = -1;
+  for (size_t i = 250; i < 260; ++i) {
+    const TrackResult result = tracker.track(roomFrame(i));
+    if (!hasPose(result.status)) continue;
+    EXPECT_LT(positionError(result.pose.T_w_c, i), 0.05) << "frame " << i;
+    if (first_good < 0) first_good = static_cast<int>(i);
+  }
+  EXPECT_GE(first_good, 250);
+  EXPECT_LE(first_good, 253);
+}
+
+// Frames dropped while the camera is covered: lost is reported, then the relocaliser finds
+// the pose at the new place.
+TEST(Tracker, RelocalisesAfterAJumpWhileLost) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+  RgbdFrame black = roomFrame(151);
+  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));  // new buffers:
+  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));   // frames are shared
+  EXPECT_EQ(tracker.track(black).status, Status::kLost);
+  bool recovered = false;
+  for (size_t i = 250; i < 255 && !recovered; ++i) {
+    const TrackResult result = tracker.track(roomFrame(i));
+    if (result.status == Status::kRelocalised) {
+      recovered = true;
+      EXPECT_LT(positionError(result.pose.T_w_c, i), 0.05) << "frame " << i;
+      EXPECT_EQ(result.pose.state, TrackingState::kRelocalised);
+    } else {
+      EXPECT_EQ(result.status, Status::kLost) << "frame " << i;
+    }
+  }
+  EXPECT_TRUE(recovered);
+  const TrackResult next = tracker.track(roomFrame(256));
+  EXPECT_EQ(next.status, Status::kTracked);
+  EXPECT_EQ(next.pose.state, TrackingState::kTracking);
+  EXPECT_LT(positionError(next.pose.T_w_c, 256), 0.05);
+}
+
+TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+  RgbdFrame black = roomFrame(151);
+  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
+  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  for (int k = 0; k < 30; ++k) {  // one second covered
+    const TrackResult result = tracker.track(black);
+    EXPECT_EQ(result.status, Status::kLost);
+    EXPECT_EQ(result.pose.state, TrackingState::kLost);
+  }
+  bool recovered = false;
+  for (size_t i = 181; i < 190 && !recovered; ++i) {
+    const TrackResult result = tracker.track(roomFrame(i));
+    if (result.status == Status::kRelocalised) {
+      recovered = true;
+      EXPECT_LT(positionError(result.pose.T_w_c, i), 0.05) << "frame " << i;
+    }
+  }
+  EXPECT_TRUE(recovered);
+}
+
+class TrackerMapUpdateTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_EQ(tracker_.track(roomFrame(0)).status, Status::kInitialised); }
+  MapUpdate update(int64_t version, bool snapshot = false) const {
+    MapUpdate u;
+    u.map_id = 1;
+    u.version = version;
+    u.is_snapshot = snapshot;
+    return u;
+  }
+  Tracker tracker_{room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1};
+};
+
+TEST_F(TrackerMapUpdateTest, IgnoresStaleForeignAndGappedVersions) {
+  MapUpdate first = update(1);
+  first.keyframes.push_back({0, SE3(Mat3::Identity(), Vec3(0.01, 0, 0))});
+  EXPECT_EQ(tracker_.applyMapUpdate(first), Tracker::UpdateStatus::kApplied);
+  EXPECT_EQ(tracker_.mapVersion(), 1);
+  EXPECT_NEAR(tracker_.map().keyframe(0)->T_w_c.translation().x(), 0.01, 1e-12);
+
+  MapUpdate stale = update(1);
+  stale.keyframes.push_back({0, SE3()});
+  EXPECT_EQ(tracker_.applyMapUpdate(stale), Tracker::UpdateStatus::kStale);
+  EXPECT_NEAR(tracker_.map().keyframe(0)->T_w_c.translation().x(), 0.01, 1e-12);
+
+  MapUpdate foreign = update(2);
+  foreign.map_id = 2;
+  foreign.keyframes.push_back({0, SE3()});
+  EXPECT_EQ(tracker_.applyMapUpdate(foreign), Tracker::UpdateStatus::kForeignMap);
+  EXPECT_EQ(tracker_.mapVersion(), 1);
+
+  MapUpdate gapped = update(3);
+  gapped.keyframes.push_back({0, SE3()});
+  EXPECT_EQ(tracker_.applyMapUpdate(gapped), Tracker::UpdateStatus::kMissingDelta);
+  EXPECT_EQ(tracker_.mapVersion(), 1);
+
+  MapUpdate snapshot = update(5, /*snapshot=*/true);
+  snapshot.acked_keyframes = {0};
+  snapshot.keyframes.push_back({0, SE3()});
+  for (const auto& [id, point] : tracker_.map().points()) snapshot.points.push_back(point.data());
+  EXPECT_EQ(tracker_.applyMapUpdate(snapshot), Tracker::UpdateStatus::kApplied);
+  EXPECT_EQ(tracker_.mapVersion(), 5);
+}
+
+TEST_F(TrackerMapUpdateTest, AppliesPointsAndRemovalsAndFlagsUnknownKeyframes) {
+  const size_t points_before = tracker_.map().numPoints();
+  const PointId some = tracker_.map().points().begin()->first;
+  MapUpdate delta = update(1);
+  delta.keyframes.push_back({42, SE3()});  // unknown keyframe
+  MapPointData moved = tracker_.map().point(some)->data();
+  moved.p_w += Vec3(0, 0, 0.01);
+  delta.points.push_back(moved);
+  MapPointData epipolar = moved;
+  epipolar.id = kPointsPerKeyframe / 2;  // the mapper's half of keyframe 0's ids
+  delta.points.push_back(epipolar);
+  MapPointData orphan = moved;
+  orphan.id = 5 * kPointsPerKeyframe + kPointsPerKeyframe / 2;
+  orphan.source_keyframe = 5;  // not in the replica
+  delta.points.push_back(orphan);
+  const PointId removed = std::next(tracker_.map().points().begin())->first;
+  delta.removed_points.push_back(removed);
+  EXPECT_EQ(tracker_.applyMapUpdate(delta), Tracker::UpdateStatus::kUnknownKeyframe);
+  EXPECT_EQ(tracker_.mapVersion(), 1);
+  EXPECT_EQ(tracker_.map().numPoints(), points_before);  // +1 epipolar, -1 removed
+  EXPECT_NEAR(tracker_.map().point(some)->p_w.z(), moved.p_w.z(), 1e-12);
+  EXPECT_NE(tracker_.map().point(epipolar.id), nullptr);
+  EXPECT_EQ(tracker_.map().point(orphan.id), nullptr);
+  EXPECT_EQ(tracker_.map().point(removed), nullptr);
+  // Tracking goes on with the updated replica.
+  EXPECT_EQ(tracker_.track(roomFrame(1)).status, Status::kTracked);
+}
+
+TEST_F(TrackerMapUpdateTest, SnapshotKeepsProvisionalPointsOfUnacknowledgedKeyframes) {
+  // A snapshot of an empty acknowledged map: keyframe 0 is not acknowledged, so its
+  // provisional points stay.
+  const size_t points_before = tracker_.map().numPoints();
+  MapUpdate snapshot = update(1, /*snapshot=*/true);
+  EXPECT_EQ(tracker_.applyMapUpdate(snapshot), Tracker::UpdateStatus::kApplied);
+  EXPECT_EQ(tracker_.map().numPoints(), points_before);
+  // Once keyframe 0 is acknowledged, a snapshot without its points removes them.
+  MapUpdate acked = update(2, /*snapshot=*/true);
+  acked.acked_keyframes = {0};
+  EXPECT_EQ(tracker_.applyMapUpdate(acked), Tracker::UpdateStatus::kApplied);
+  EXPECT_EQ(tracker_.map().numPoints(), 0u);
+}
+
+TEST(Tracker, ResetStartsANewMap) {
+  Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  feed(&tracker, 0, 5);
+  tracker.reset();
+  EXPECT_EQ(tracker.map().numKeyframes(), 0u);
+  EXPECT_EQ(tracker.mapVersion(), 0);
+  const TrackResult result = tracker.track(roomFrame(10));
+  EXPECT_EQ(result.status, Status::kInitialised);
+  ASSERT_TRUE(result.new_keyframe);
+  EXPECT_EQ(result.new_keyframe->id, 0);
+}
+
+TEST(Tracker, TracksTumTeddyWithoutMapper) {
+  RGBDSLAM_REQUIRE_SHARED_DATA(dir, "tum_fr3_teddy_200");
+  const auto camera = loadCamera(sourceDir() + "/config/cameras/tum_fr3.yaml");
+  ASSERT_TRUE(camera.ok()) << camera.error();
+  auto source = openTumDataset(dir, *camera);
+  ASSERT_TRUE(source.ok()) << source.error();
+  Tracker tracker(*camera, TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Trajectory estimate;
+  int frames = 0, with_pose = 0, lost = 0;
+  for (;;) {
+    FrameResult next = (*source)->next();
+    if (next.status == FrameResult::Status::kEnd) break;
+    ASSERT_EQ(next.status, FrameResult::Status::kFrame) << next.error;
+    ++frames;
+    const TrackResult result = tracker.track(next.frame);
+    if (result.status == Status::kLost) ++lost;
+    if (!hasPose(result.status)) continue;
+    ++with_pose;
+    estimate.push_back({next.frame.utime * 1e-6, result.pose.T_w_c});
+  }
+  const auto groundtruth = readTumTrajectory(dir + "/groundtruth.txt");
+  ASSERT_TRUE(groundtruth.ok());
+  const auto eval = evaluateTrajectory(*groundtruth, estimate, EvalOptions{});
+  ASSERT_TRUE(eval.ok()) << eval.error();
+  std::printf("fr3/teddy, tracker only: %d/%d frames with a pose, %d lost, ATE rmse %.4f m, "
+              "%zu keyframes\n",
+              with_pose, frames, lost, eval->ate_m.rmse, tracker.map().numKeyframes());
+  // Known limitation (see the tracker's report): alone, without the mapper's bundle
+  // adjustment and point culling, the tracker loses the teddy sequence after ~45 frames (a
+  // blurred stretch), and the relocaliser cannot recover because the camera then leaves the
+  // mapped part of the scene. Guard what works: the start is tracked, and accurately.
+  EXPECT_GE(with_pose, 40);
+  EXPECT_LT(eval->ate_m.rmse, 0.02);
+}
+
+}  // namespace
+}  // namespace rgbdslam
