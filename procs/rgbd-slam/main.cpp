@@ -21,7 +21,7 @@ CommandLine makeCommandLine() {
   cli.option("set", "SECTION.KEY=VALUE", "override one configuration option (repeatable by commas)");
   cli.option("groundtruth", "FILE", "ground truth in TUM format", "the source's own, if any");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
-  cli.flag("print-config", "print the effective configuration as a table and exit");
+  cli.option("print-config", "yaml|markdown", "print the effective configuration (loadable YAML, or a table) and exit");
   cli.flag("quiet", "no progress line");
   return cli;
 }
@@ -38,7 +38,8 @@ int main(int argc, char** argv) {
   auto options = BatchOptions::fromCommandLine(cli);
   if (!options) return usageError("rgbd-slam", options.error());
   if (cli.has("print-config")) {
-    std::cout << options->registry->markdownTable();
+    const bool markdown = cli.get("print-config") == "markdown";
+    std::cout << (markdown ? options->registry->markdownTable() : options->registry->yamlText());
     return 0;
   }
   auto runner = BatchRunner::create(std::move(*options));

@@ -160,4 +160,20 @@ std::string OptionRegistry::markdownTable() const {
   return out.str();
 }
 
+std::string OptionRegistry::yamlText() const {
+  std::ostringstream out;
+  out << "%YAML:1.0\n";
+  std::string section;
+  for (const auto& e : entries_) {
+    if (e.section != section) {
+      section = e.section;
+      out << "\n" << section << ":\n";
+    }
+    const std::string value = e.kind == "choice" ? "\"" + e.show() + "\"" : e.show();
+    out << "  # " << e.help << (e.unit.empty() ? "" : " [" + e.unit + "]") << "\n";
+    out << "  " << e.key << ": " << value << "\n";
+  }
+  return out.str();
+}
+
 }  // namespace rgbdslam

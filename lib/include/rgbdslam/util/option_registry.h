@@ -30,6 +30,9 @@ class OptionRegistry {
   std::string describe() const;  // "section.key = value  [unit] help" per line
   // Markdown table of every option with unit, default and meaning (for docs).
   std::string markdownTable() const;
+  // A loadable YAML file of every option at its current value, commented with unit and
+  // meaning (config/slam.yaml is this output for the defaults).
+  std::string yamlText() const;
 
  private:
   struct Entry {

@@ -1,0 +1,84 @@
+#include "rgbdslam/util/option_registry.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "rgbdslam/system/slam_system.h"
+#include "test_support.h"
+
+namespace rgbdslam {
+namespace {
+
+struct Sample {
+  double rate = 30.0;
+  int count = 5;
+  bool enabled = true;
+  std::string mode = "a";
+  void bind(OptionRegistry* r) {
+    r->bind("sample", "rate", &rate, 0.0, 100.0, "Hz", "a rate");
+    r->bind("sample", "count", &count, 1, 10, "items", "a count");
+    r->bind("sample", "enabled", &enabled, "a switch");
+    r->bind("sample", "mode", &mode, {"a", "b"}, "a choice");
+  }
+};
+
+std::string writeYaml(const test::TempDir& dir, const std::string& body) {
+  const std::string path = dir.file("c.yaml");
+  std::ofstream(path) << "%YAML:1.0\n" << body;
+  return path;
+}
+
+TEST(OptionRegistry, LoadsKnownKeys) {
+  test::TempDir dir;
+  Sample s;
+  OptionRegistry r;
+  s.bind(&r);
+  ASSERT_TRUE(r.load(writeYaml(dir, "sample:\n  rate: 12.5\n  count: 7\n  enabled: false\n  mode: b\n")));
+  EXPECT_DOUBLE_EQ(s.rate, 12.5);
+  EXPECT_EQ(s.count, 7);
+  EXPECT_FALSE(s.enabled);
+  EXPECT_EQ(s.mode, "b");
+}
+
+TEST(OptionRegistry, RejectsUnknownIllTypedAndOutOfRange) {
+  test::TempDir dir;
+  const char* bad[] = {"sample:\n  rte: 1\n", "other:\n  rate: 1\n", "sample:\n  rate: fast\n",
+                       "sample:\n  count: 2.5\n", "sample:\n  count: 11\n", "sample:\n  mode: c\n",
+                       "sample:\n  enabled: maybe\n"};
+  for (const char* body : bad) {
+    Sample s;
+    OptionRegistry r;
+    s.bind(&r);
+    const Status loaded = r.load(writeYaml(dir, body));
+    EXPECT_FALSE(loaded) << body;
+    EXPECT_NE(loaded.error().find(dir.file("c.yaml")), std::string::npos) << loaded.error();
+  }
+}
+
+TEST(OptionRegistry, CommandLineAssignments) {
+  Sample s;
+  OptionRegistry r;
+  s.bind(&r);
+  EXPECT_TRUE(r.set("sample.rate=50"));
+  EXPECT_DOUBLE_EQ(s.rate, 50.0);
+  EXPECT_FALSE(r.set("sample.rate=500"));
+  EXPECT_FALSE(r.set("sample.nothing=1"));
+  EXPECT_FALSE(r.set("rate=1"));
+}
+
+TEST(OptionRegistry, ShippedSlamConfigMatchesTheDefaults) {
+  SlamOptions defaults;
+  OptionRegistry expected;
+  defaults.bind(&expected);
+  SlamOptions loaded_options;
+  OptionRegistry loaded;
+  loaded_options.bind(&loaded);
+  const Status status = loaded.load(test::sourceDir() + "/config/slam.yaml");
+  ASSERT_TRUE(status) << status.error();
+  EXPECT_EQ(loaded.yamlText(), expected.yamlText())
+      << "config/slam.yaml is out of date: regenerate it with rgbd-slam --print-config yaml";
+}
+
+}  // namespace
+}  // namespace rgbdslam
