@@ -348,12 +348,14 @@ TEST(Tracker, TracksTumTeddyWithoutMapper) {
   std::printf("fr3/teddy, tracker only: %d/%d frames with a pose, %d lost, ATE rmse %.4f m, "
               "%zu keyframes\n",
               with_pose, frames, lost, eval->ate_m.rmse, tracker.map().numKeyframes());
-  // Known limitation (see the tracker's report): alone, without the mapper's bundle
-  // adjustment and point culling, the tracker loses the teddy sequence after ~45 frames (a
-  // blurred stretch), and the relocaliser cannot recover because the camera then leaves the
-  // mapped part of the scene. Guard what works: the start is tracked, and accurately.
-  EXPECT_GE(with_pose, 40);
-  EXPECT_LT(eval->ate_m.rmse, 0.02);
+  // Measured (variance-relative ZMSSD acceptance, dense fallback search, keyframes while
+  // dodgy): 154/193 frames with a pose, ATE rmse 0.0207 m, 15 keyframes. Alone, without the
+  // mapper's bundle adjustment, the pose drifts over the now ~4x longer tracked stretch;
+  // before these changes the tracker was lost for good after ~45 frames (ATE < 2 cm on
+  // those). Bounds: the measurement with a margin (~10 % of the frames, ~50 % of the ATE).
+  // rgbd-slam with the mapper poses 191/193 frames of this sequence.
+  EXPECT_GE(with_pose, 140);
+  EXPECT_LT(eval->ate_m.rmse, 0.03);
 }
 
 }  // namespace

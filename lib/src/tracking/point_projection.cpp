@@ -1,6 +1,9 @@
 #include "rgbdslam/tracking/point_projection.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <optional>
 
 namespace rgbdslam {
 
@@ -86,6 +89,43 @@ bool ensurePatch(PointSlot* slot, double tolerance) {
 
 namespace rgbdslam {
 
+namespace {
+
+// ZMSSD acceptance for one patch (PointSearchOptions::max_zmssd_energy_ratio).
+int acceptanceFor(const Patch& patch, const PointSearchOptions& options) {
+  const double energy =
+      patch.sum_sq - static_cast<double>(patch.sum) * patch.sum / kPatchArea;
+  return std::max(options.max_zmssd,
+                  static_cast<int>(options.max_zmssd_energy_ratio * energy));
+}
+
+// The pixel within 'radius' [px] (Euclidean) of 'predicted' whose ZMSSD is smallest and
+// below max_zmssd; nullopt if none.
+std::optional<cv::Point2i> searchDense(const Patch& patch, const cv::Mat& image,
+                                       const Eigen::Vector2d& predicted, int radius,
+                                       int max_zmssd) {
+  const int cx = static_cast<int>(std::lround(predicted.x()));
+  const int cy = static_cast<int>(std::lround(predicted.y()));
+  const double radius_sq = static_cast<double>(radius) * radius;
+  int best = max_zmssd;
+  std::optional<cv::Point2i> best_position;
+  for (int y = cy - radius; y <= cy + radius; ++y) {
+    for (int x = cx - radius; x <= cx + radius; ++x) {
+      const double dx = x - predicted.x(), dy = y - predicted.y();
+      const cv::Point2i p(x, y);
+      if (dx * dx + dy * dy > radius_sq || !patchInImage(image, p)) continue;
+      const int score = zmssdAt(patch, image, p);
+      if (score < best) {
+        best = score;
+        best_position = p;
+      }
+    }
+  }
+  return best_position;
+}
+
+}  // namespace
+
 int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
                  const std::vector<LevelCorners>& corners, const PointSearchOptions& options) {
   int found = 0;
@@ -99,11 +139,16 @@ int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyram
     if (!ensurePatch(slot, options.patch_cache_tolerance)) continue;
     slot->searched = true;
     const Eigen::Vector2d predicted_level = levelFromZero(slot->uv, level);
-    const auto match = searchPatch(slot->patch, pyramid.levels[level], corners[level],
-                                   predicted_level, options.radius_px, options.max_zmssd);
+    const cv::Mat& image = pyramid.levels[level];
+    const int max_zmssd = acceptanceFor(slot->patch, options);
+    auto match = searchPatch(slot->patch, image, corners[level], predicted_level,
+                             options.radius_px, max_zmssd);
+    if (!match && options.dense_fallback) {
+      match = searchDense(slot->patch, image, predicted_level, options.radius_px, max_zmssd);
+    }
     if (!match) continue;
     Eigen::Vector2d position(match->x, match->y);
-    if (!refineSubpixel(slot->patch, pyramid.levels[level], &position, options.subpixel)) continue;
+    if (!refineSubpixel(slot->patch, image, &position, options.subpixel)) continue;
     slot->found = true;
     slot->found_uv = zeroFromLevel(position, level);
     slot->found_level = level;

@@ -291,7 +291,11 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   result.pose.points_tracked = attempt.found;
   result.pose.quality = attempt.quality;
   ++frames_since_keyframe_;
-  const KeyframePolicyInput input{state == TrackingState::kTracking, frames_since_keyframe_,
+  const bool keyframe_allowed =
+      state == TrackingState::kTracking ||
+      (state == TrackingState::kDodgy && options_.keyframes_while_dodgy &&
+       depthPointsAllowed(mode_, next_keyframe_id_));
+  const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c};
   const KeyframePolicyOptions policy{options_.min_frames_between_keyframes,
                                      options_.keyframe_distance_ratio, options_.keyframe_angle_deg};
@@ -360,6 +364,8 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
   PointSearchOptions search;
   search.radius_px = radius_px;
   search.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
+  search.max_zmssd_energy_ratio = options_.max_zmssd_energy_ratio;
+  search.dense_fallback = options_.search_dense_fallback;
   search.patch_cache_tolerance = options_.patch_cache_tolerance;
   searchPoints(slots, pyramid_, corners_, search);
   observations_.clear();

@@ -24,6 +24,10 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "fine search radius at the search level");
   r->bind(s, "max_zmssd_per_pixel", &max_zmssd_per_pixel, 1, 65025, "grey^2",
           "patch match accepted when ZMSSD / 64 is below this");
+  r->bind(s, "max_zmssd_energy_ratio", &max_zmssd_energy_ratio, 0.0, 2.0, "",
+          "...or when ZMSSD is below this times the template's zero-mean energy (0: off)");
+  r->bind(s, "search_dense_fallback", &search_dense_fallback,
+          "no FAST corner in the search radius matches: test every pixel in it");
   r->bind(s, "image_margin_px", &image_margin_px, 0, 100, "px",
           "projected points closer than this to the image border are not searched");
   r->bind(s, "patch_cache_tolerance", &patch_cache_tolerance, 0.0, 1.0, "",
@@ -56,6 +60,8 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "new keyframe when every keyframe is farther than this times the median depth...");
   r->bind(s, "keyframe_angle_deg", &keyframe_angle_deg, 0.0, 180.0, "deg",
           "...or rotated by more than this");
+  r->bind(s, "keyframes_while_dodgy", &keyframes_while_dodgy,
+          "also add keyframes while tracking is dodgy, when the mode creates points from depth");
   r->bind(s, "keyframe_min_depth_m", &keyframe_build.min_depth_m, 0.0, 100.0, "m",
           "depth readings nearer than this are invalid");
   r->bind(s, "keyframe_max_depth_m", &keyframe_build.max_depth_m, 0.0, 100.0, "m",

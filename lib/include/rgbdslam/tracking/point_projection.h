@@ -82,14 +82,26 @@ namespace rgbdslam {
 
 struct PointSearchOptions {
   int radius_px = 4;                    // search radius at the search level [px]
-  int max_zmssd = 400 * kPatchArea;     // ZMSSD acceptance [grey^2 over the patch]
+  int max_zmssd = 400 * kPatchArea;     // ZMSSD acceptance floor [grey^2 over the patch]
+  // Acceptance relative to the template's own zero-mean energy E = sum (T - mean T)^2: a
+  // match is accepted when ZMSSD < max(max_zmssd, ratio * E). Why: the ZMSSD of a correct
+  // match grows with the template's contrast (blur, resampling and small appearance changes
+  // scale with the gradients), so an absolute threshold rejects exactly the high-contrast
+  // patches that localise best. A flat image patch scores ZMSSD = E, so ratio < 1 still
+  // rejects "no texture here". 0 disables (absolute threshold only).
+  double max_zmssd_energy_ratio = 0.0;
+  // When no FAST corner within the radius is accepted, also test every pixel within the
+  // radius (PTAM searches corners only; under motion blur and on fine texture the true
+  // position often is no FAST corner at this frame's threshold).
+  bool dense_fallback = false;
   double patch_cache_tolerance = 0.05;  // see ensurePatch()
   SubpixelOptions subpixel;
 };
 
 // Searches each slot's (warped) patch among the FAST corners of its search level around its
-// predicted pixel and refines the best match to sub-pixel. Sets searched (the patch could
-// be made), found, found_uv (level 0) and found_level. Returns the number found.
+// predicted pixel (and, with dense_fallback, at every pixel in the radius when no corner is
+// accepted) and refines the best match to sub-pixel. Sets searched (the patch could be
+// made), found, found_uv (level 0) and found_level. Returns the number found.
 int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
                  const std::vector<LevelCorners>& corners, const PointSearchOptions& options);
 

@@ -37,6 +37,9 @@ struct TrackerOptions {
   int fine_max_points = 1000;           // points searched in the fine stage
   int fine_radius_px = 4;               // fine search radius at the search level [px]
   int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
+  // ...or ZMSSD below this times the template's zero-mean energy (PointSearchOptions)
+  double max_zmssd_energy_ratio = 0.5;
+  bool search_dense_fallback = true;    // test every pixel in the radius when no corner matches
   int coarse_min_points = 10;           // fewer coarse candidates: skip the coarse stage
   int image_margin_px = 8;              // projected points this close to the border are skipped [px]
   double patch_cache_tolerance = 0.05;  // re-warp a cached patch when an entry of A changes more
@@ -62,6 +65,11 @@ struct TrackerOptions {
   int min_frames_between_keyframes = 10;      // frames since the last keyframe
   double keyframe_distance_ratio = 0.1;       // min distance to nearest keyframe / median scene depth
   double keyframe_angle_deg = 15.0;           // or this much rotation from the nearest keyframe [deg]
+  // PTAM adds keyframes only while tracking is good, because a monocular keyframe's points
+  // need later views to be triangulated. A keyframe with depth brings its own points at once,
+  // so while dodgy (the view drifting away from the mapped part) a keyframe is what restores
+  // tracking: allowed whenever the mode creates points from depth.
+  bool keyframes_while_dodgy = true;
   // Keyframe images and provisional points
   KeyframeBuildOptions keyframe_build;
   DepthPointOptions depth_points;
