@@ -28,6 +28,7 @@ struct CliOptions {
   bool print_json = false;       // print JSON instead of "key value" lines
   std::string json_out;          // also write the JSON here, if not empty
   std::string plot_path;         // write a PNG plot here, if not empty
+  std::string errors_out;        // write per-pose ATE errors (CSV) here, if not empty
   std::string frames_from;       // count frames in this rgb.txt, if not empty
   rgbdslam::EvalOptions eval;
 };
@@ -61,6 +62,9 @@ rgbdslam::CommandLine makeCommandLine() {
       "plot", "FILE.png",
       "write a 1200x600 PNG: top view in the ground truth's plane of largest extent, and the "
       "remaining axis over time (default: none)");
+  cli.option("errors-out", "FILE.csv",
+             "write each associated pose's time [s] and position error after alignment [m] "
+             "(default: none)");
   cli.flag("similarity",
            "align with scale, rotation and translation (monocular runs); default: rigid (scale 1)");
   cli.option("max-dt", "S",
@@ -96,6 +100,7 @@ Expected<CliOptions> readOptions(const rgbdslam::CommandLine& cli) {
   options.print_json = cli.has("json");
   options.json_out = cli.get("json-out");
   options.plot_path = cli.get("plot");
+  options.errors_out = cli.get("errors-out");
   options.frames_from = cli.get("frames-from");
   options.eval.similarity = cli.has("similarity");
   for (const auto& [name, field] : {std::pair{"max-dt", &options.eval.max_dt_s},
@@ -161,6 +166,19 @@ int report(const CliOptions& options, const rgbdslam::Trajectory& groundtruth,
   std::fputs(options.print_json ? json.c_str() : rgbdslam::toKeyValueText(result).c_str(), stdout);
   if (!options.json_out.empty()) {
     if (Status written = writeTextFile(options.json_out, json); !written) {
+      return fail(kExitEvalFailed, written.error());
+    }
+  }
+  if (!options.errors_out.empty()) {
+    std::string csv = "t_s,error_m\n";
+    char line[64];
+    for (const auto& pair : result.pairs) {
+      const rgbdslam::Vec3 p_est = result.S_gt_est * estimate[pair.est_index].T_w_c.translation();
+      const double error = (p_est - groundtruth[pair.gt_index].T_w_c.translation()).norm();
+      std::snprintf(line, sizeof(line), "%.6f,%.6f\n", estimate[pair.est_index].t, error);
+      csv += line;
+    }
+    if (Status written = writeTextFile(options.errors_out, csv); !written) {
       return fail(kExitEvalFailed, written.error());
     }
   }

@@ -80,7 +80,11 @@ set -e
 
 # 4. --json parses and carries the ATE; --json-out writes the same; --plot writes a PNG.
 "$slam_eval" "$work/gt.txt" "$work/est.txt" --json --json-out "$work/out.json" \
-  --plot "$work/plot.png" >"$work/stdout.json"
+  --plot "$work/plot.png" --errors-out "$work/errors.csv" >"$work/stdout.json"
+# --errors-out: a header and one row per associated pose, each error ~0 (a rigid motion).
+[[ $(wc -l <"$work/errors.csv") -eq 401 ]] || fail "errors.csv should have 401 lines"
+awk -F, 'NR > 1 && $2 > 1e-5 { bad = 1 } END { exit bad }' "$work/errors.csv" \
+  || fail "errors.csv holds a non-zero error for a rigidly moved trajectory"
 python3 - "$work" <<'EOF' || fail "JSON or PNG check failed"
 import json, struct, sys
 work = sys.argv[1]
@@ -98,7 +102,7 @@ EOF
 
 # 5. --help documents the options and exits 0.
 help="$("$slam_eval" --help)"
-for option in --json --json-out --plot --similarity --max-dt --frames --frames-from; do
+for option in --json --json-out --plot --errors-out --similarity --max-dt --frames --frames-from; do
   grep -q -- "$option" <<<"$help" || fail "--help does not mention $option"
 done
 
