@@ -39,22 +39,40 @@ class SeparationGrid {
   std::vector<std::vector<Eigen::Vector2d>> cells_;
 };
 
-// Depth at a level-0 pixel if the 3x3 neighbourhood is valid and smooth (not an edge).
-std::optional<double> stableDepth(const cv::Mat& depth, const Eigen::Vector2d& uv, double max_spread) {
+// Depth at a level-0 pixel if it has a reading and the readings around it in the 3x3
+// window agree with it (a corner on a depth edge would get the depth of either side).
+// In dense depth a missing neighbour marks an edge or a hole (occlusion shadow, glass), so
+// it rejects the corner ('require_all'); in sparse depth readings are missing everywhere
+// and carry no such meaning, so missing neighbours are ignored.
+std::optional<double> stableDepth(const cv::Mat& depth, const Eigen::Vector2d& uv, double max_spread,
+                                  bool require_all) {
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
   if (u < 1 || v < 1 || u >= depth.cols - 1 || v >= depth.rows - 1) return std::nullopt;
-  float lo = INFINITY, hi = -INFINITY;
+  const float centre = depth.at<float>(v, u);
+  if (!std::isfinite(centre)) return std::nullopt;
+  float lo = centre, hi = centre;
   for (int dv = -1; dv <= 1; ++dv) {
     for (int du = -1; du <= 1; ++du) {
       const float d = depth.at<float>(v + dv, u + du);
-      if (!std::isfinite(d)) return std::nullopt;
+      if (!std::isfinite(d)) {
+        if (require_all) return std::nullopt;
+        continue;
+      }
       lo = std::min(lo, d);
       hi = std::max(hi, d);
     }
   }
-  const float centre = depth.at<float>(v, u);
   if (hi - lo > max_spread * centre) return std::nullopt;
   return centre;
+}
+
+double validFraction(const cv::Mat& depth) {
+  int valid = 0;
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* row = depth.ptr<float>(v);
+    for (int u = 0; u < depth.cols; ++u) valid += std::isfinite(row[u]) ? 1 : 0;
+  }
+  return depth.total() ? static_cast<double>(valid) / depth.total() : 0.0;
 }
 
 struct Candidate {
@@ -71,6 +89,7 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
   for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
   const SE3& T_w_c = keyframe.T_w_c;
+  const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
   for (int level = 0; level < static_cast<int>(keyframe.corners.size()); ++level) {
     const cv::Mat& image = keyframe.pyramid.levels[level];
     std::vector<Candidate> candidates;
@@ -89,7 +108,7 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
       if (added >= options.max_points_per_level) break;
       const Eigen::Vector2d uv = zeroFromLevel(Eigen::Vector2d(cand.corner.x, cand.corner.y), level);
       if (!grid.isFree(uv)) continue;
-      const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity);
+      const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity, dense);
       if (!depth) continue;
       NewPoint np;
       np.point.id = first_id + static_cast<PointId>(created.size());

@@ -72,6 +72,10 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "weaker corners give no point");
   r->bind(s, "depth_points_min_separation_px", &depth_points.min_separation_px, 0.0, 100.0, "px",
           "new points keep this distance from measured points and each other");
+  r->bind(s, "depth_points_discontinuity", &depth_points.depth_discontinuity, 0.0, 1.0, "fraction",
+          "a spread of the 3x3 window's depths above this (relative to the corner's) rejects the corner");
+  r->bind(s, "depth_points_dense_fraction", &depth_points.dense_depth_fraction, 0.0, 1.0, "fraction",
+          "with at least this fraction of pixels valid, a missing 3x3 neighbour rejects a corner");
 }
 
 }  // namespace rgbdslam

@@ -17,7 +17,8 @@ struct DepthPointOptions {
   double min_shi_tomasi = 30.0;       // weaker corners are not used: smallest eigenvalue of the mean structure tensor [(grey/px)^2]
   double min_separation_px = 8.0;     // from already-measured points and each other, level 0 [px]
   int patch_border_px = 6;            // corners this close to the level's border are skipped [px]
-  double depth_discontinuity = 0.05;  // max relative depth spread in the 3x3 window (edges are skipped)
+  double dense_depth_fraction = 0.5;  // at least this fraction of pixels with depth: a missing 3x3 neighbour rejects a corner
+  double depth_discontinuity = 0.05;  // max spread of the 3x3 window's depths relative to the centre's (edges are skipped)
 };
 
 struct NewPoint {
