@@ -23,6 +23,7 @@ CommandLine makeCommandLine() {
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
   cli.option("print-config", "yaml|markdown", "print the effective configuration (loadable YAML, or a table) and exit");
   cli.flag("quiet", "no progress line");
+  addLcmUrlOption(cli);  // accepted like every process; lcmlog: sources are read from the file
   return cli;
 }
 

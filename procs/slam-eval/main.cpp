@@ -51,8 +51,8 @@ rgbdslam::CommandLine makeCommandLine() {
       "'key value' lines (ate_rmse_m, ate_mean_m, ate_median_m, ate_max_m, scale,\n"
       "rpe_per_s_trans_rmse_m, rpe_per_s_rot_rmse_deg, rpe_per_m_*, num_estimate, "
       "num_groundtruth,\n"
-      "num_associated, coverage, alignment). Works on files only: slam-eval does not use LCM\n"
-      "(no --lcm-url). Exit codes: 0 success, 1 evaluation or output failed, 2 bad arguments or\n"
+      "num_associated, coverage, alignment). Works on files only: --lcm-url is accepted like\n"
+      "in every process, and nothing is sent or received. Exit codes: 0 success, 1 evaluation or output failed, 2 bad arguments or\n"
       "input files.");
   cli.positional("GROUNDTRUTH", "ground-truth trajectory (TUM format)");
   cli.positional("TRAJ", "estimated trajectory (TUM format)");
@@ -78,6 +78,7 @@ rgbdslam::CommandLine makeCommandLine() {
   cli.option("frames", "N",
              "number of input frames, for coverage = num_associated / N "
              "(default: unknown, coverage null)");
+  rgbdslam::addLcmUrlOption(cli);  // accepted for uniformity; slam-eval uses no network
   cli.option("frames-from", "RGB_TXT",
              "count the frames in a TUM rgb.txt instead of giving --frames");
   return cli;

@@ -7,7 +7,7 @@ CAMERA=$SRC/config/cameras/synthetic.yaml
 SEQ=$WORK/seq
 
 # A small valid TUM sequence from the renderer (the capture's own tum: reader reads it back).
-"$TOOLS/write-sequence" room,frames=6 "$SEQ" > /dev/null || fail "could not write a sequence"
+"$PROCS/synth-write" room,frames=6 "$SEQ" 2> /dev/null || fail "could not write a sequence"
 
 expect_error() {  # expect_error EXIT_CODE PATTERN ARGS...
   local code=$1 pattern=$2; shift 2
@@ -29,7 +29,7 @@ cp -r "$SEQ" "$WORK/trunc"; f=$(ls "$WORK/trunc/rgb" | sed -n 3p); truncate -s 1
 expect_error 1 "rgb/$f: cannot decode" --source "tum:$WORK/trunc" --camera "$CAMERA"
 grep -q "published 5 frames, 1 bad" "$WORK/out.log" || fail "the other frames were not published"
 cp -r "$SEQ" "$WORK/depth8"; f=$(ls "$WORK/depth8/depth" | sed -n 2p)
-"$TOOLS/write-sequence" --eight-bit-depth "$WORK/depth8/depth/$f"
+"$TOOLS/eight-bit-depth" "$WORK/depth8/depth/$f"
 expect_error 1 "must be a 16-bit" --source "tum:$WORK/depth8" --camera "$CAMERA"
 sed 's/^image_width: 640/image_width: 320/' "$CAMERA" > "$WORK/small.yaml"
 expect_error 1 "but the camera file says 320x480" --source "tum:$SEQ" --camera "$WORK/small.yaml"
