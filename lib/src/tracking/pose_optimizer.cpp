@@ -56,12 +56,14 @@ void linearise(const PinholeCamera& camera, const SE3& T_c_w,
 
 }  // namespace
 
-double robustSigmaSquared(std::vector<double>* e2, double floor_sigma) {
+double robustSigmaSquared(std::vector<double>* e2, double floor_sigma, double cap_sigma) {
   const double floor2 = floor_sigma * floor_sigma;
   if (e2->empty()) return floor2;
   const auto middle = e2->begin() + static_cast<std::ptrdiff_t>(e2->size() / 2);
   std::nth_element(e2->begin(), middle, e2->end());
-  return std::max(floor2, kMadToSigma * kMadToSigma * *middle);
+  double sigma2 = std::max(floor2, kMadToSigma * kMadToSigma * *middle);
+  if (cap_sigma > 0.0) sigma2 = std::min(sigma2, std::max(floor2, cap_sigma * cap_sigma));
+  return sigma2;
 }
 
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
@@ -77,8 +79,10 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
     linearise(camera, result.T_c_w, observations, options, &lin);
     if (static_cast<int>(lin.e2_2d.size()) < kMinObservations) return result;
-    const double cut2_2d = c2 * robustSigmaSquared(&lin.e2_2d, options.min_robust_sigma);
-    const double cut2_depth = c2 * robustSigmaSquared(&lin.e2_depth, options.min_robust_sigma);
+    const bool capped = iteration >= options.free_scale_iterations;
+    const double cap = capped ? options.max_robust_sigma : 0.0;
+    const double cut2_2d = c2 * robustSigmaSquared(&lin.e2_2d, options.min_robust_sigma, cap);
+    const double cut2_depth = c2 * robustSigmaSquared(&lin.e2_depth, options.min_robust_sigma, cap);
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int inliers_2d = 0, inliers_depth = 0;
@@ -112,7 +116,11 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
     result.T_c_w = SE3::exp(xi) * result.T_c_w;
     result.iterations = iteration + 1;
     result.ok = true;
-    if (xi.norm() < options.converged_step) break;
+    // Converged: stop, unless the capped scale has yet to be tried (jump to it).
+    if (xi.norm() < options.converged_step) {
+      if (capped || options.max_robust_sigma <= 0.0 || iteration + 1 >= options.iterations) break;
+      iteration = std::max(iteration, options.free_scale_iterations - 1);
+    }
   }
   return result;
 }

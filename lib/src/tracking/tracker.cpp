@@ -31,6 +31,15 @@ struct Attempt {
   int found = 0;
   double quality = 0.0;
   double median_depth_m = 0.0;  // of the found inliers
+  bool did_coarse = false;      // the coarse stage ran
+};
+
+// A fine-stage slot's search outcome, to restore an earlier attempt.
+struct SlotOutcome {
+  PointSlot* slot;
+  bool searched, found;
+  Eigen::Vector2d found_uv;
+  int found_level;
 };
 
 double median(std::vector<double>* values) {
@@ -84,7 +93,9 @@ class Tracker::Impl {
   TrackResult relocalise(const RgbdFrame& frame);
   TrackResult trackNormally(const RgbdFrame& frame);
   SE3 predictPose() const;
-  Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame);
+  Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, bool allow_coarse = true);
+  void saveOutcome(std::vector<SlotOutcome>* outcome) const;
+  void restoreOutcome(const std::vector<SlotOutcome>& outcome);
   void projectAll(const SE3& T_c_w);
   SE3 runStage(const std::vector<PointSlot*>& slots, const SE3& T_c_w, int radius_px,
                const RgbdFrame& frame, bool mark_inliers);
@@ -134,6 +145,7 @@ class Tracker::Impl {
   std::vector<PoseObservation> observations_;
   std::vector<uint8_t> inliers_;
   std::vector<double> depths_;
+  std::vector<SlotOutcome> outcome_;
 };
 
 // ---------------------------------------------------------------------------------------
@@ -232,7 +244,20 @@ SE3 Tracker::Impl::predictPose() const {
 }
 
 TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
-  const Attempt attempt = trackFrom(predictPose(), frame);
+  const SE3 predicted = predictPose();
+  Attempt attempt = trackFrom(predicted, frame);
+  // The coarse stage fits a few dozen matches at the coarsest levels, where fine texture
+  // gives many wrong ones; now and then they pull the pose off, and the fine stage, which
+  // searches near that pose, cannot bring it back. A poor result after a coarse stage is
+  // therefore compared with the fine stage alone from the prediction, and the attempt that
+  // explains more of its searched points is kept.
+  if (attempt.did_coarse && options_.retry_without_coarse &&
+      attempt.quality < options_.quality_good) {
+    saveOutcome(&outcome_);
+    const Attempt retry = trackFrom(predicted, frame, /*allow_coarse=*/false);
+    if (retry.quality > attempt.quality) attempt = retry;
+    else restoreOutcome(outcome_);
+  }
   if (isLost(attempt)) {
     state_ = TrackingState::kLost;
     velocity_.setZero();
@@ -308,7 +333,28 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
 // ---------------------------------------------------------------------------------------
 // Tracking from a start pose: projection, coarse stage, fine stage
 
-Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame) {
+void Tracker::Impl::saveOutcome(std::vector<SlotOutcome>* outcome) const {
+  outcome->clear();
+  for (PointSlot* slot : stage_) {
+    outcome->push_back({slot, slot->searched, slot->found, slot->found_uv, slot->found_level});
+  }
+}
+
+// Makes stage_ and the slots' search flags those of the saved attempt again.
+void Tracker::Impl::restoreOutcome(const std::vector<SlotOutcome>& outcome) {
+  for (PointSlot& slot : slots_) slot.searched = slot.found = false;
+  stage_.clear();
+  for (const SlotOutcome& o : outcome) {
+    o.slot->searched = o.searched;
+    o.slot->found = o.found;
+    o.slot->found_uv = o.found_uv;
+    o.slot->found_level = o.found_level;
+    stage_.push_back(o.slot);
+  }
+}
+
+Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
+                                 bool allow_coarse) {
   for (PointSlot& slot : slots_) slot.searched = slot.found = false;
   SE3 T_c_w = T_c_w_start;
   projectAll(T_c_w);
@@ -316,7 +362,9 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame)
   for (PointSlot* slot : visible_) {
     if (slot->search_level >= options_.coarse_min_level) stage_.push_back(slot);
   }
-  if (static_cast<int>(stage_.size()) >= options_.coarse_min_points) {
+  bool did_coarse = false;
+  if (allow_coarse && static_cast<int>(stage_.size()) >= options_.coarse_min_points) {
+    did_coarse = true;
     selectSubset(&stage_, options_.coarse_max_points);
     T_c_w = runStage(stage_, T_c_w, options_.coarse_radius_px, frame, false);
     for (PointSlot* slot : stage_) slot->searched = slot->found = false;
@@ -328,6 +376,7 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame)
 
   Attempt attempt;
   attempt.T_c_w = T_c_w;
+  attempt.did_coarse = did_coarse;
   depths_.clear();
   int reliable_searched = 0, reliable_found = 0;
   for (PointSlot* slot : stage_) {
@@ -400,6 +449,8 @@ PoseOptimizerOptions Tracker::Impl::poseOptions() const {
   pose.iterations = options_.gauss_newton_iterations;
   pose.tukey_c = options_.tukey_c;
   pose.min_robust_sigma = options_.min_robust_sigma;
+  pose.max_robust_sigma = options_.max_robust_sigma;
+  pose.free_scale_iterations = options_.free_scale_iterations;
   pose.use_depth = options_.use_depth_in_pose;
   pose.depth_sigma_coefficient = options_.depth_sigma_coefficient;
   return pose;

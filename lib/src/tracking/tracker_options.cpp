@@ -18,6 +18,9 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "coarse search radius at the search level");
   r->bind(s, "coarse_min_points", &coarse_min_points, 3, 10000, "points",
           "fewer coarse candidates than this: skip the coarse stage");
+  r->bind(s, "retry_without_coarse", &retry_without_coarse,
+          "a frame tracked below quality_good after a coarse stage is tracked again from the "
+          "prediction without it; the better of the two is kept");
   r->bind(s, "fine_max_points", &fine_max_points, 10, 100000, "points",
           "points searched in the fine stage at most (random subset beyond)");
   r->bind(s, "fine_radius_px", &fine_radius_px, 1, 50, "px",
@@ -37,6 +40,11 @@ void TrackerOptions::bind(OptionRegistry* r) {
   r->bind(s, "tukey_c", &tukey_c, 1.0, 20.0, "sigmas", "Tukey biweight cut-off");
   r->bind(s, "min_robust_sigma", &min_robust_sigma, 0.01, 10.0, "sigmas",
           "floor of the robust scale estimated from the median error");
+  r->bind(s, "max_robust_sigma", &max_robust_sigma, 0.0, 10.0, "sigmas",
+          "cap of the robust scale after the free iterations, so many wrong matches cannot "
+          "widen the cut-off (0: no cap)");
+  r->bind(s, "free_scale_iterations", &free_scale_iterations, 0, 100, "iterations",
+          "pose iterations per stage with the median scale uncapped, before the cap applies");
   r->bind(s, "use_depth_in_pose", &use_depth_in_pose,
           "add depth residuals of tracked corners with a depth reading to the pose");
   r->bind(s, "depth_sigma_coefficient", &depth_sigma_coefficient, 1e-5, 1.0, "1/m",

@@ -6,6 +6,17 @@
 // by them. Depth residuals (paper sec. IV-E) use their own robust scale, so a bad depth
 // reading does not discard the good 2-D measurement of the same point.
 //
+// The median scale is only robust while outliers are fewer than half the residuals at the
+// current pose. With many wrong matches (fine texture, fur) the fit can settle where the
+// wrong matches pull it: there the correct matches' errors are large too, the median is
+// large, the cut-off admits everything and the wrong pose explains itself. So, as PTAM
+// does ("force the M-estimator to be brutal" after the fifth iteration), the first
+// free_scale_iterations use the median scale alone (a wide basin for a poor start) and
+// the later ones cap it at max_robust_sigma measurement sigmas: the residuals are
+// normalised by their known noise, so a correct pose has a scale near 1 whatever the
+// outliers, and matches beyond tukey_c times the cap get no weight. The fit does not stop
+// on a small step before the cap has been applied.
+//
 // Call order: fill PoseObservations, optimisePose(camera, T_c_w_start, observations, options).
 // Frames and units: T_c_w maps world to camera (the residuals' convention, ba_residuals.h),
 // updated by the left perturbation T_c_w <- exp(xi) T_c_w. Pixels at level 0, depth in m.
@@ -27,6 +38,9 @@ struct PoseOptimizerOptions {
   int iterations = 10;                        // Gauss-Newton iterations at most
   double tukey_c = 4.6851;                    // cut-off in robust sigmas
   double min_robust_sigma = 0.4;              // floor of the robust scale [measurement sigmas]
+  double max_robust_sigma = 1.0;              // cap of the robust scale after the free
+                                              // iterations [measurement sigmas]; 0: no cap
+  int free_scale_iterations = 5;              // iterations with the uncapped median scale
   bool use_depth = true;                      // add the depth residuals
   double depth_sigma_coefficient = 3.331e-3;  // a in sigma_d = a d^2 [1/m]
   double converged_step = 1e-7;               // stop when |xi| is below this
@@ -55,8 +69,8 @@ inline double tukeyWeight(double e2, double c2) {
   return t * t;
 }
 
-// Robust squared scale of squared normalised errors: max(floor^2, 1.4826^2 median(e2)).
-// 'e2' is reordered.
-double robustSigmaSquared(std::vector<double>* e2, double floor_sigma);
+// Robust squared scale of squared normalised errors: max(floor^2, 1.4826^2 median(e2)),
+// and at most cap^2 when cap_sigma > 0. 'e2' is reordered.
+double robustSigmaSquared(std::vector<double>* e2, double floor_sigma, double cap_sigma = 0.0);
 
 }  // namespace rgbdslam

@@ -41,11 +41,16 @@ struct TrackerOptions {
   double max_zmssd_energy_ratio = 0.5;
   bool search_dense_fallback = true;    // test every pixel in the radius when no corner matches
   int coarse_min_points = 10;           // fewer coarse candidates: skip the coarse stage
+  // A result below quality_good after a coarse stage is compared with the fine stage alone
+  // from the prediction; the one with the higher quality is kept.
+  bool retry_without_coarse = true;
   int image_margin_px = 8;              // projected points this close to the border are skipped [px]
   double patch_cache_tolerance = 0.05;  // re-warp a cached patch when an entry of A changes more
   int gauss_newton_iterations = 10;     // pose iterations per stage
   double tukey_c = 4.6851;              // Tukey cut-off in robust sigmas
   double min_robust_sigma = 0.4;        // floor of the robust sigma [measurement sigmas]
+  double max_robust_sigma = 1.0;        // cap of the robust sigma after the free iterations
+  int free_scale_iterations = 5;        // pose iterations with the uncapped median scale
   bool use_depth_in_pose = true;        // add depth residuals of tracked corners to the pose
   double depth_sigma_coefficient = 3.331e-3;  // a in sigma_d = a d^2 for depth residuals [1/m]
   int random_seed = 1;                  // seed of the point subset selection (deterministic)
