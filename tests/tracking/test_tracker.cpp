@@ -94,7 +94,7 @@ TEST(Tracker, RejectsBadFramesAndInitialisesFromDepth) {
   RgbdFrame no_depth = roomFrame(0);
   no_depth.depth = cv::Mat();
   const TrackResult not_initialised = tracker.track(no_depth);
-  EXPECT_EQ(not_initialised.status, Status::kBadFrame);
+  EXPECT_EQ(not_initialised.status, Status::kNotInitialised);
   EXPECT_NE(not_initialised.error.find("no depth to initialise"), std::string::npos);
   EXPECT_EQ(not_initialised.pose.state, TrackingState::kInitialising);
 

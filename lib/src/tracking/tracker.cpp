@@ -189,6 +189,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   TrackResult result;
   result.pose.state = TrackingState::kInitialising;
   if (frame.depth.empty() || frame.depth.size() != frame.colour.size()) {
+    result.status = TrackResult::Status::kNotInitialised;
     result.error = "no depth to initialise";
     return result;
   }
@@ -203,6 +204,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   const std::vector<NewPoint> points =
       createPointsFromDepth(*keyframe, camera_, options_.depth_points, 0);
   if (static_cast<int>(points.size()) < options_.init_min_points) {
+    result.status = TrackResult::Status::kNotInitialised;
     result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
                    std::to_string(options_.init_min_points) + " needed)";
     return result;

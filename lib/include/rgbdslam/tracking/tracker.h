@@ -88,7 +88,9 @@ struct TrackResult {
     kTracked,       // pose found (state tracking or dodgy)
     kLost,          // no pose; relocalising
     kRelocalised,   // recovered from loss with this frame
-    kBadFrame,      // unusable input (no colour, wrong size, no depth for initialisation)
+    kBadFrame,      // unusable input (no colour, wrong size); 'error' says why
+    kNotInitialised,  // no map yet and this frame cannot start one (too few corners with
+                      // depth); not an input error: the next frames are tried
   };
   Status status = Status::kBadFrame;
   PoseEstimate pose;
