@@ -8,7 +8,7 @@ SHARED=${RGBDSLAM_SHARED_DIR:-$SRC/../shared}
 PROCS=$BUILD/procs
 TOOLS=$BUILD/tests/tools
 NETNS_RUN=$SRC/scripts/netns-run
-LCM_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
+LCM_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"  # only ever used inside a private namespace (scripts/netns-run)
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/rgbdslam-it-XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 

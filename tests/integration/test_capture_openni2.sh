@@ -10,7 +10,7 @@ N=45
 grep -qi "openni2" "$WORK/devices.txt" || fail "--list-devices printed no OpenNI2 section: $(cat "$WORK/devices.txt")"
 
 start=$(date +%s)
-if "$PROCS/rgbd-capture" --source openni2:/nonexistent/recording.oni 2> "$WORK/missing.log"; then
+if "$NETNS_RUN" "$PROCS/rgbd-capture" --source openni2:/nonexistent/recording.oni 2> "$WORK/missing.log"; then
   fail "a missing recording was accepted"
 fi
 [ $(( $(date +%s) - start )) -le 10 ] || fail "a missing device took more than 10 s to report"
