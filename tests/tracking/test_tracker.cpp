@@ -348,14 +348,12 @@ TEST(Tracker, TracksTumTeddyWithoutMapper) {
   std::printf("fr3/teddy, tracker only: %d/%d frames with a pose, %d lost, ATE rmse %.4f m, "
               "%zu keyframes\n",
               with_pose, frames, lost, eval->ate_m.rmse, tracker.map().numKeyframes());
-  // Measured (variance-relative ZMSSD acceptance, dense fallback search, keyframes while
-  // dodgy): 154/193 frames with a pose, ATE rmse 0.0207 m, 15 keyframes. Alone, without the
-  // mapper's bundle adjustment, the pose drifts over the now ~4x longer tracked stretch;
-  // before these changes the tracker was lost for good after ~45 frames (ATE < 2 cm on
-  // those). Bounds: the measurement with a margin (~10 % of the frames, ~50 % of the ATE).
-  // rgbd-slam with the mapper poses 191/193 frames of this sequence.
-  EXPECT_GE(with_pose, 140);
-  EXPECT_LT(eval->ate_m.rmse, 0.03);
+  // Measured 2026-11-22 (robust scale capped after five iterations, poor frames retried
+  // without the coarse stage): 193/193 frames with a pose, ATE rmse 0.0047 m, 18 keyframes,
+  // tracker alone without the mapper. Bounds: the measurement with a margin of ~1.7x on the
+  // ATE and a few frames, for other machines' floating point.
+  EXPECT_GE(with_pose, 188);
+  EXPECT_LT(eval->ate_m.rmse, 0.008);
 }
 
 }  // namespace
