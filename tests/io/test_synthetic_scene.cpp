@@ -129,6 +129,8 @@ TEST(SyntheticSpec, FormatRoundTrips) {
   EXPECT_DOUBLE_EQ(again.noise.depth_fraction, 0.25);
   EXPECT_FALSE(again.noise.depth_enabled);
   EXPECT_EQ(formatSyntheticSpec(SyntheticOptions{}), "room");
+  EXPECT_EQ(formatSyntheticSpec(parsed("room,drop=120-149")), "room,drop=120-149");
+  EXPECT_EQ(formatSyntheticSpec(parsed("room,drop=7")), "room,drop=7-7");
 }
 
 TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
@@ -151,6 +153,11 @@ TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
       {"room,depth_sigma=x", "depth_sigma"},
       {"room,quantise=yes", "quantise"},
       {"room,seed", "seed"},
+      {"room,drop=", "drop"},
+      {"room,drop=a-b", "drop"},
+      {"room,drop=-1", "drop"},
+      {"room,drop=150-120", "drop"},
+      {"room,drop=3-", "drop"},
   };
   for (const auto& [spec, named] : cases) {
     const auto result = parseSyntheticSpec(spec);
@@ -501,6 +508,34 @@ TEST(SyntheticScene, FrameSourceRendersEveryFrameThenEnds) {
     EXPECT_TRUE(identical(result.frame.depth, scene.render(i).depth));
   }
   EXPECT_EQ(source->next().status, FrameResult::Status::kEnd);
+}
+
+// A 1 s gap (issue 3): the dropped frames are left out, the others keep their index and
+// timestamp, and the scene and its ground truth are those of the same scene without drops.
+TEST(SyntheticScene, DroppedFramesLeaveAGapAndKeepTimestamps) {
+  const SyntheticOptions options = parsed("room,frames=10,drop=3-5");
+  const auto source = makeSyntheticSource(options);
+  EXPECT_EQ(source->size(), std::optional<size_t>(7));
+  const SyntheticScene plain(parsed("room,frames=10"));
+  std::vector<int64_t> seqs;
+  for (int i = 0; i < 20; ++i) {  // bounded: 7 frames then the end
+    const FrameResult result = source->next();
+    if (result.status == FrameResult::Status::kEnd) break;
+    ASSERT_EQ(result.status, FrameResult::Status::kFrame);
+    const size_t seq = static_cast<size_t>(result.frame.seq);
+    seqs.push_back(result.frame.seq);
+    EXPECT_EQ(result.frame.utime, plain.frameUtime(seq));
+    EXPECT_TRUE(identical(result.frame.colour, plain.render(seq).colour)) << "frame " << seq;
+  }
+  EXPECT_EQ(seqs, (std::vector<int64_t>{0, 1, 2, 6, 7, 8, 9}));
+  const SyntheticScene dropped(options);
+  EXPECT_EQ(dropped.numFrames(), 10u);
+  EXPECT_EQ(dropped.groundTruth().size(), 10u);
+  EXPECT_LT((dropped.groundTruthPose(4).inverse() * plain.groundTruthPose(4)).log().norm(), 1e-12);
+  // A range past the end drops what it covers; one index drops one frame.
+  EXPECT_EQ(makeSyntheticSource(parsed("room,frames=10,drop=8-20"))->size(),
+            std::optional<size_t>(8));
+  EXPECT_EQ(makeSyntheticSource(parsed("room,frames=10,drop=0"))->next().frame.seq, 1);
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
 constexpr const char* kKnownKeys =
     "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
-    "noise_sigma, depth_sigma, quantise";
+    "noise_sigma, depth_sigma, quantise, drop";
 
 PinholeCamera syntheticCamera() {
   PinholeCamera camera;
@@ -84,6 +84,13 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
     } else {
       return badValue(key, value, "on, off or first");
     }
+  } else if (key == "drop") {  // FIRST-LAST or N
+    const size_t dash = value.find('-');
+    const std::string first = value.substr(0, dash);
+    const std::string last = dash == std::string::npos ? first : value.substr(dash + 1);
+    if (!parseInteger(first, &o->drop_first) || !parseInteger(last, &o->drop_last)) {
+      return badValue(key, value, "FIRST-LAST frame indices or one index");
+    }
   } else if (key == "quantise") {
     if (value != "0" && value != "1") return badValue(key, value, "0 or 1");
     n.quantise = value == "1";
@@ -124,16 +131,23 @@ class SyntheticSource : public FrameSource {
   explicit SyntheticSource(const SyntheticOptions& options) : scene_(options) {}
   FrameResult next() override {
     FrameResult result;
+    while (next_ < scene_.numFrames() && scene_.options().dropped(next_)) ++next_;
     if (next_ >= scene_.numFrames()) return result;  // kEnd
     result.status = FrameResult::Status::kFrame;
     result.frame = scene_.render(next_++);
     return result;
   }
   double nominalRateHz() const override { return scene_.options().rate_hz; }
-  std::optional<size_t> size() const override { return scene_.numFrames(); }
+  std::optional<size_t> size() const override {
+    size_t kept = 0;
+    for (size_t i = 0; i < scene_.numFrames(); ++i) kept += scene_.options().dropped(i) ? 0 : 1;
+    return kept;
+  }
   std::string describe() const override {
+    const size_t dropped = scene_.numFrames() - *size();
     return "synthetic:" + formatSyntheticSpec(scene_.options()) + " (" +
-           std::to_string(scene_.numFrames()) + " frames)";
+           std::to_string(scene_.numFrames()) + " frames" +
+           (dropped > 0 ? ", " + std::to_string(dropped) + " dropped" : "") + ")";
   }
 
  private:
@@ -197,6 +211,9 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
     add("depth_sigma", formatDouble(n.sigma_coefficient));
   }
   if (n.quantise != d.noise.quantise) add("quantise", n.quantise ? "1" : "0");
+  if (o.drop_first >= 0) {
+    add("drop", std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last));
+  }
   return spec;
 }
 
@@ -208,6 +225,11 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
     return Error{"depth_fraction must be in (0, 1], got " + formatDouble(n.depth_fraction)};
   }
   if (n.depth_frames < -1) return Error{"depth_frames must be >= -1 (-1: all frames)"};
+  const bool no_drop = o.drop_first == -1 && o.drop_last == -1;
+  if (!no_drop && !(o.drop_first >= 0 && o.drop_last >= o.drop_first)) {
+    return Error{"drop must be FIRST-LAST with 0 <= FIRST <= LAST, got " +
+                 std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last)};
+  }
   if (!(n.min_range_m > 0)) return Error{"min_range must be > 0 m"};
   if (!(n.max_range_m > n.min_range_m && n.max_range_m <= kMaxRangeLimitM)) {
     return Error{"max_range must be in (min_range, 13] m, got " + formatDouble(n.max_range_m)};

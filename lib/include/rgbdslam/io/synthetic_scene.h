@@ -74,17 +74,32 @@ struct SyntheticOptions {
   uint64_t seed = 1;     // everything random derives from it
   int num_frames = 0;    // 0: the scene's default length (room 600, corridor 3300)
   double rate_hz = 30.0; // frame rate [Hz]
+  // Frames drop_first..drop_last (indices, inclusive) are left out by the FrameSource, as if
+  // the camera or the link lost them: the frames around keep their indices and timestamps,
+  // so a gap in time appears (drop=120-149 at 30 Hz: 1 s). -1: nothing dropped. The scene
+  // itself (render, groundTruth) is unaffected.
+  int drop_first = -1;
+  int drop_last = -1;
   KinectNoiseOptions noise;
+
+  // True if the FrameSource leaves frame i out.
+  bool dropped(size_t i) const {
+    return drop_first >= 0 && i >= static_cast<size_t>(drop_first) &&
+           i <= static_cast<size_t>(drop_last);
+  }
 };
 
 // "room" or "corridor" followed by optional ",key=value" pairs: seed, frames, rate,
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
-// (image noise), depth_sigma (a), quantise (0|1). E.g. "room,seed=3,depth_fraction=0.3".
+// (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
+// or one index N; see SyntheticOptions::drop_first). E.g. "room,seed=3,depth_fraction=0.3",
+// "room,frames=300,drop=120-149".
 // An unknown key or bad value is an Error naming it.
 Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
 // The spec string of 'options' (round-trips through parseSyntheticSpec), for logs.
 std::string formatSyntheticSpec(const SyntheticOptions& options);
-// Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1], ...).
+// Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1],
+// 0 <= drop_first <= drop_last or both -1, ...).
 Status validateSyntheticOptions(const SyntheticOptions& options);
 
 namespace synthetic {
@@ -127,7 +142,8 @@ class SyntheticScene {
   std::shared_ptr<const synthetic::World> world_;
 };
 
-// A FrameSource that renders the frames on the fly, in order.
+// A FrameSource that renders the frames on the fly, in order, leaving out the dropped ones
+// (size() counts only the frames it will deliver).
 std::unique_ptr<FrameSource> makeSyntheticSource(const SyntheticOptions& options);
 
 }  // namespace rgbdslam
