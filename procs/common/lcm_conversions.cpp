@@ -1,6 +1,7 @@
 #include "common/lcm_conversions.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 
 #include "rgbdslam/image/codec.h"
@@ -43,6 +44,18 @@ Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, 
   if (format == rgbdslam::rgbd_frame_t::DEPTH_ZLIB_U16) {
     auto depth = decompressDepth(bytes.data(), bytes.size(), width, height);
     if (!depth) return Error{"depth: " + depth.error()};
+    return depth;
+  }
+  if (format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF || format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_QUARTER) {
+    const int step = format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF ? 2 : 4;
+    auto sparse = decompressDepth(bytes.data(), bytes.size(), (width + step - 1) / step, (height + step - 1) / step);
+    if (!sparse) return Error{"subsampled depth: " + sparse.error()};
+    cv::Mat depth(height, width, CV_16UC1);
+    for (int v = 0; v < height; ++v) {
+      const uint16_t* in = sparse->ptr<uint16_t>(v / step);
+      uint16_t* out = depth.ptr<uint16_t>(v);
+      for (int u = 0; u < width; ++u) out[u] = in[u / step];
+    }
     return depth;
   }
   if (format != rgbdslam::rgbd_frame_t::DEPTH_RAW_U16) {
@@ -88,7 +101,7 @@ Expected<MapPointData> fromLcm(const rgbdslam::map_point_t& msg) {
 rgbdslam::map_point_t toLcm(const MapPointData& point) {
   rgbdslam::map_point_t msg;
   msg.point_id = point.id;
-  for (int i = 0; i < 3; ++i) msg.position[i] = point.p_w[i];
+  for (int i = 0; i < 3; ++i) msg.position[i] = static_cast<float>(point.p_w[i]);
   msg.source_keyframe = point.source_keyframe;
   msg.u = static_cast<float>(point.uv.x());
   msg.v = static_cast<float>(point.uv.y());
@@ -184,7 +197,24 @@ Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg) {
   return pose;
 }
 
-rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe) {
+namespace {
+
+// The centre pixel of each step x step block (no averaging: a mean across a depth edge would
+// invent a surface that is not there); expanded again by repetition, every pixel then reads
+// a measured depth at most step / 2 pixels away.
+cv::Mat subsampleDepth(const cv::Mat& depth, int step) {
+  cv::Mat sparse((depth.rows + step - 1) / step, (depth.cols + step - 1) / step, CV_16UC1);
+  for (int v = 0; v < sparse.rows; ++v) {
+    const uint16_t* in = depth.ptr<uint16_t>(std::min(step * v + step / 2, depth.rows - 1));
+    uint16_t* out = sparse.ptr<uint16_t>(v);
+    for (int u = 0; u < sparse.cols; ++u) out[u] = in[std::min(step * u + step / 2, depth.cols - 1)];
+  }
+  return sparse;
+}
+
+}  // namespace
+
+rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding& encoding) {
   rgbdslam::keyframe_t msg;
   msg.utime = keyframe.utime;
   msg.map_id = keyframe.map_id;
@@ -192,10 +222,16 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe) {
   putPose(keyframe.T_w_c, msg.position, msg.orientation);
   msg.width = keyframe.grey.cols;
   msg.height = keyframe.grey.rows;
-  msg.grey_format = rgbdslam::keyframe_t::GREY_PNG;
-  msg.grey = encodePng(keyframe.grey);
+  msg.grey_format = encoding.jpeg_grey ? rgbdslam::keyframe_t::GREY_JPEG : rgbdslam::keyframe_t::GREY_PNG;
+  msg.grey = encoding.jpeg_grey ? encodeJpeg(keyframe.grey, encoding.jpeg_quality) : encodePng(keyframe.grey);
   msg.grey_size = static_cast<int32_t>(msg.grey.size());
-  encodeDepth(keyframe.depth, true, 1, &msg.depth_format, &msg.depth);
+  if (encoding.depth_step > 1 && !keyframe.depth.empty()) {
+    const int step = encoding.depth_step >= 4 ? 4 : 2;
+    msg.depth_format = step == 2 ? rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF : rgbdslam::keyframe_t::DEPTH_ZLIB_U16_QUARTER;
+    msg.depth = compressDepth(subsampleDepth(keyframe.depth, step), 6);
+  } else {
+    encodeDepth(keyframe.depth, true, 1, &msg.depth_format, &msg.depth);
+  }
   msg.depth_size = static_cast<int32_t>(msg.depth.size());
   msg.depth_scale = static_cast<float>(keyframe.depth_scale);
   for (const auto& m : keyframe.measurements) {
@@ -270,6 +306,13 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
   msg.num_keyframes = static_cast<int32_t>(msg.keyframes.size());
   for (const auto& p : update.points) msg.points.push_back(toLcm(p));
   msg.num_points = static_cast<int32_t>(msg.points.size());
+  for (const auto& moved : update.moved_points) {
+    rgbdslam::point_position_t out;
+    out.point_id = moved.id;
+    for (int i = 0; i < 3; ++i) out.position[i] = static_cast<float>(moved.p_w[i]);
+    msg.moved.push_back(out);
+  }
+  msg.num_moved = static_cast<int32_t>(msg.moved.size());
   msg.removed_points = update.removed_points;
   msg.num_removed = static_cast<int32_t>(msg.removed_points.size());
   return msg;
@@ -293,6 +336,11 @@ Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg) {
     auto point = fromLcm(p);
     if (!point) return Error{what + point.error()};
     update.points.push_back(*point);
+  }
+  for (const auto& moved : msg.moved) {
+    const Vec3 p_w(moved.position[0], moved.position[1], moved.position[2]);
+    if (!p_w.allFinite()) return Error{what + "moved point " + std::to_string(moved.point_id) + " position is not finite"};
+    update.moved_points.push_back({moved.point_id, p_w});
   }
   update.removed_points = msg.removed_points;
   return update;

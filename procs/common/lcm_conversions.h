@@ -34,8 +34,16 @@ Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg);
 rgbdslam::pose_t toLcm(const PoseEstimate& pose);
 Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg);
 
-// Grey image as PNG (lossless), depth zlib-compressed.
-rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe);
+// How keyframes are encoded on the wire. The default is lossless (what tests compare); the
+// tracker process sends JPEG grey and half-resolution depth by default to keep the radio link
+// under 1 Mbit/s (see docs/design.md, "What crosses the link").
+struct KeyframeEncoding {
+  bool jpeg_grey = false;   // false: PNG (lossless); true: JPEG
+  int jpeg_quality = 90;    // JPEG quality [1, 100]
+  int depth_step = 1;       // depth at every n-th pixel and row: 1 (all), 2 (DEPTH_ZLIB_U16_HALF)
+                            // or 4 (DEPTH_ZLIB_U16_QUARTER)
+};
+rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding& encoding = {});
 Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);
 
 rgbdslam::map_t toLcm(const MapUpdate& update);

@@ -170,6 +170,7 @@ TEST(LcmConversions, MapRoundTrip) {
   update.acked_keyframes = {0, 1, 2};
   update.keyframes.push_back({2, somePose()});
   update.points.push_back({5, Vec3(0.5, 0.25, 3), 1, Eigen::Vector2d(100, 200), 0});
+  update.moved_points.push_back({6, Vec3(100.0, -2.5, 1.25)});
   update.removed_points = {9, 10};
   auto back = fromLcm(toLcm(update));
   ASSERT_TRUE(back) << back.error();
@@ -179,7 +180,33 @@ TEST(LcmConversions, MapRoundTrip) {
   EXPECT_EQ(back->removed_points, update.removed_points);
   ASSERT_EQ(back->points.size(), 1u);
   EXPECT_EQ(back->points[0].uv, Eigen::Vector2d(100, 200));
+  ASSERT_EQ(back->moved_points.size(), 1u);
+  EXPECT_EQ(back->moved_points[0].id, 6);
+  EXPECT_LT((back->moved_points[0].p_w - Vec3(100.0, -2.5, 1.25)).norm(), 1e-5);  // float
   EXPECT_LT((back->keyframes[0].T_w_c.inverse() * somePose()).log().norm(), 1e-12);
+}
+
+TEST(LcmConversions, CompactKeyframeEncodingKeepsHalfTheDepthPixels) {
+  KeyframeData keyframe;
+  keyframe.id = 1;
+  keyframe.grey = cv::Mat(48, 64, CV_8UC1);
+  cv::randu(keyframe.grey, 0, 255);
+  keyframe.depth = cv::Mat(48, 64, CV_16UC1);
+  cv::randu(keyframe.depth, 1000, 20000);
+  const auto bytes = encode(toLcm(keyframe, KeyframeEncoding{true, 80, 2}));
+  auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());
+  ASSERT_TRUE(msg) << msg.error();
+  EXPECT_EQ(int{msg->grey_format}, int{rgbdslam::keyframe_t::GREY_JPEG});
+  EXPECT_EQ(int{msg->depth_format}, int{rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF});
+  auto back = fromLcm(*msg);
+  ASSERT_TRUE(back) << back.error();
+  ASSERT_EQ(back->depth.size(), keyframe.depth.size());
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) {  // each pixel takes the value of its 2x2 block's centre
+      ASSERT_EQ(back->depth.at<uint16_t>(v, u), keyframe.depth.at<uint16_t>(v - v % 2 + 1, u - u % 2 + 1));
+    }
+  }
+  EXPECT_EQ(back->grey.size(), keyframe.grey.size());
 }
 
 TEST(LcmConversions, StatusRoundTrip) {

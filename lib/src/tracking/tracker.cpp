@@ -584,6 +584,11 @@ Tracker::UpdateStatus Tracker::Impl::applyMapUpdate(const MapUpdate& update) {
     if (same_patch && it != slot_index_.end()) continue;  // slot and patch cache stay valid
     addSlot(stored);
   }
+  for (const PointPosition& moved : update.moved_points) {
+    MapPoint* point = map_.point(moved.id);
+    if (point) point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
+    else unknown = true;
+  }
   for (PointId id : update.removed_points) {
     removeSlot(id);
     map_.removePoint(id);

@@ -46,6 +46,11 @@ struct KeyframePose {
   SE3 T_w_c;
 };
 
+struct PointPosition {
+  PointId id = -1;
+  Vec3 p_w = Vec3::Zero();  // new position in the world [m]
+};
+
 struct MapUpdate {
   int64_t utime = 0;        // publication time [us]
   int64_t map_id = 0;
@@ -53,7 +58,8 @@ struct MapUpdate {
   bool is_snapshot = false; // true: full map; false: delta against version - 1
   std::vector<KeyframeId> acked_keyframes;
   std::vector<KeyframePose> keyframes;
-  std::vector<MapPointData> points;
+  std::vector<MapPointData> points;         // new or re-described points (all, in a snapshot)
+  std::vector<PointPosition> moved_points;  // known points that only moved (patch unchanged)
   std::vector<PointId> removed_points;
 };
 

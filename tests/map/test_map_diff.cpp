@@ -1,0 +1,76 @@
+#include "rgbdslam/map/map_diff.h"
+
+#include <gtest/gtest.h>
+
+namespace rgbdslam {
+namespace {
+
+// A map with two keyframes (blank images: only poses matter here) and three points.
+Map makeMap() {
+  Map map;
+  for (KeyframeId id : {0, 1}) {
+    KeyframeData data;
+    data.id = id;
+    data.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(128));
+    data.T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1 * id, 0, 0));
+    map.addKeyframe(makeKeyframe(data, KeyframeBuildOptions{}));
+  }
+  for (PointId id : {1, 2, 3}) {
+    MapPoint p;
+    p.id = id;
+    p.p_w = Vec3(0, 0, 1.0 + id);
+    p.source_keyframe = 0;
+    map.addPoint(p);
+  }
+  return map;
+}
+
+TEST(MapDiffer, SnapshotHoldsEverythingAndAnUnchangedMapGivesAnEmptyDelta) {
+  Map map = makeMap();
+  MapDiffer differ;
+  MapUpdate snapshot = differ.snapshot(map);
+  EXPECT_TRUE(snapshot.is_snapshot);
+  EXPECT_EQ(snapshot.keyframes.size(), 2u);
+  EXPECT_EQ(snapshot.points.size(), 3u);
+  MapUpdate delta = differ.delta(map);
+  EXPECT_FALSE(delta.is_snapshot);
+  EXPECT_TRUE(differ.empty(delta));
+}
+
+TEST(MapDiffer, SendsMovesAboveTheThresholdNewPointsAndRemovals) {
+  Map map = makeMap();
+  MapDiffer differ;  // 1 mm
+  differ.snapshot(map);
+  map.point(1)->p_w.x() += 0.0005;  // below: not sent
+  map.point(2)->p_w.x() += 0.002;   // above: sent
+  map.removePoint(3);
+  MapPoint p;
+  p.id = 4;
+  p.source_keyframe = 1;
+  map.addPoint(p);
+  map.keyframe(1)->T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1, 0.01, 0));
+  MapUpdate delta = differ.delta(map);
+  ASSERT_EQ(delta.points.size(), 1u);  // the new one, in full
+  EXPECT_EQ(delta.points[0].id, 4);
+  ASSERT_EQ(delta.moved_points.size(), 1u);  // the moved one, position only
+  EXPECT_EQ(delta.moved_points[0].id, 2);
+  EXPECT_DOUBLE_EQ(delta.moved_points[0].p_w.x(), map.point(2)->p_w.x());
+  ASSERT_EQ(delta.removed_points.size(), 1u);
+  EXPECT_EQ(delta.removed_points[0], 3);
+  ASSERT_EQ(delta.keyframes.size(), 1u);
+  EXPECT_EQ(delta.keyframes[0].id, 1);
+}
+
+TEST(MapDiffer, SlowDriftAccumulatesUntilItCrossesTheThreshold) {
+  Map map = makeMap();
+  MapDiffer differ;
+  differ.snapshot(map);
+  for (int step = 1; step <= 3; ++step) {
+    map.point(1)->p_w.x() += 0.0004;  // 0.4, 0.8, 1.2 mm from the published position
+    MapUpdate delta = differ.delta(map);
+    EXPECT_EQ(delta.moved_points.size(), step == 3 ? 1u : 0u) << "step " << step;
+  }
+}
+
+}  // namespace
+}  // namespace rgbdslam
