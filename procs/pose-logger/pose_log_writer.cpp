@@ -34,17 +34,6 @@ bool vouchedFor(TrackingState state) {
 
 }  // namespace
 
-const char* stateName(TrackingState state) {
-  switch (state) {
-    case TrackingState::kInitialising: return "initialising";
-    case TrackingState::kTracking: return "tracking";
-    case TrackingState::kDodgy: return "dodgy";
-    case TrackingState::kLost: return "lost";
-    case TrackingState::kRelocalised: return "relocalised";
-  }
-  return "unknown";
-}
-
 std::string defaultCsvPath(const std::string& trajectory_path) {
   const size_t dot = trajectory_path.rfind('.');
   const size_t slash = trajectory_path.rfind('/');
@@ -90,7 +79,7 @@ Status PoseLogWriter::write(const PoseEstimate& pose) {
   char csv[512];
   std::snprintf(csv, sizeof(csv), "%lld,%lld,%s,%d,%.4f,%.3f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
                 static_cast<long long>(pose.utime), static_cast<long long>(pose.seq),
-                stateName(pose.state), pose.points_tracked, pose.quality, pose.latency_ms, t.x(),
+                toString(pose.state), pose.points_tracked, pose.quality, pose.latency_ms, t.x(),
                 t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
   if (Status s = writeLine(csv_fd_, csv, csv_path_); !s) return s;
   ++csv_lines_;

@@ -31,6 +31,5 @@ class PoseLogWriter {
 
 // "TRAJ.txt" -> "TRAJ.csv" (or TRAJ + ".csv" when there is no extension).
 std::string defaultCsvPath(const std::string& trajectory_path);
-const char* stateName(TrackingState state);
 
 }  // namespace rgbdslam

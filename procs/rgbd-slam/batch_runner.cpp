@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 
 #include "common/source_factory.h"
 #include "rgbdslam/camera/calibration_io.h"
@@ -27,31 +26,13 @@ double percentile(std::vector<double> values, double q) {
   return values[static_cast<size_t>(q * (values.size() - 1))];
 }
 
-// Splits "a=1,b=2" into assignments; commas inside values are not supported.
-std::vector<std::string> splitAssignments(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) {
-    if (!item.empty()) out.push_back(item);
-  }
-  return out;
-}
-
 }  // namespace
 
 Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   BatchOptions o;
-  o.registry = std::make_unique<OptionRegistry>();
-  o.slam->bind(o.registry.get());
-  if (cli.has("config")) {
-    if (Status s = o.registry->load(cli.get("config")); !s) return Error{s.error()};
-  }
-  for (const std::string& assignment : splitAssignments(cli.get("set"))) {
-    if (Status s = o.registry->set(assignment); !s) return Error{"--set: " + s.error()};
-  }
-  if (cli.has("mode")) {
-    if (Status s = o.registry->set("slam.mode=" + cli.get("mode")); !s) return Error{"--mode: " + s.error()};
-  }
+  auto config = loadSlamConfig(cli);
+  if (!config) return Error{config.error()};
+  o.config = std::move(*config);
   if (cli.has("print-config")) return o;
   if (!cli.has("source")) return Error{"--source is required (see --help)"};
   if (!cli.has("output")) return Error{"--output is required (see --help)"};
@@ -100,8 +81,8 @@ BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
       groundtruth_(std::move(groundtruth)) {
   std::cerr << "rgbd-slam: " << source_->describe() << ", camera " << camera_.name << ", "
             << (options_.deterministic ? "deterministic" : "concurrent mapper") << "\n"
-            << "configuration:\n" << options_.registry->describe();
-  slam_ = std::make_unique<SlamSystem>(camera_, *options_.slam, options_.deterministic);
+            << "configuration:\n" << options_.config.registry->describe();
+  slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic);
 }
 
 void BatchRunner::showProgress(const TrackResult& result, bool final_line) {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/cli.h"
+#include "common/slam_config.h"
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/io/frame_source.h"
 #include "rgbdslam/io/trajectory_io.h"
@@ -22,9 +23,7 @@ struct BatchOptions {
   long max_frames = 0;                     // 0 = all
   bool quiet = false;
   std::string groundtruth_path;            // empty: the source's own
-  // On the heap so that moving BatchOptions keeps the registry's pointers into it valid.
-  std::unique_ptr<SlamOptions> slam = std::make_unique<SlamOptions>();
-  std::unique_ptr<OptionRegistry> registry;  // bound to *slam; for printing
+  SlamConfig config;                       // the SLAM options and their registry
 
   static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
 };

@@ -15,13 +15,10 @@ CommandLine makeCommandLine() {
   cli.option("source", "SRC", "tum:DIR | synth:SCENE[,key=value...] | openni2:URI | lcmlog:FILE[@CHANNEL]");
   cli.option("camera", "FILE", "camera calibration YAML (required except for synth:)");
   cli.option("output", "TRAJ.txt", "trajectory in TUM format (every frame that got a pose)");
-  cli.option("mode", "M", "mono | depth-init | depth-ba (overrides slam.mode)", "depth-ba");
   cli.flag("deterministic", "process every frame; the mapper finishes each keyframe before the next frame");
-  cli.option("config", "FILE", "SLAM configuration (see config/slam.yaml)", "built-in defaults");
-  cli.option("set", "SECTION.KEY=VALUE", "override one configuration option (repeatable by commas)");
+  addSlamConfigOptions(cli);
   cli.option("groundtruth", "FILE", "ground truth in TUM format", "the source's own, if any");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
-  cli.option("print-config", "yaml|markdown", "print the effective configuration (loadable YAML, or a table) and exit");
   cli.flag("quiet", "no progress line");
   addLcmUrlOption(cli);  // accepted like every process; lcmlog: sources are read from the file
   return cli;
@@ -38,11 +35,7 @@ int main(int argc, char** argv) {
   }
   auto options = BatchOptions::fromCommandLine(cli);
   if (!options) return usageError("rgbd-slam", options.error());
-  if (cli.has("print-config")) {
-    const bool markdown = cli.get("print-config") == "markdown";
-    std::cout << (markdown ? options->registry->markdownTable() : options->registry->yamlText());
-    return 0;
-  }
+  if (printConfigIfAsked(cli, options->config)) return 0;
   auto runner = BatchRunner::create(std::move(*options));
   if (!runner) return usageError("rgbd-slam", runner.error());
   return (*runner)->run(installStopHandlers());

@@ -1,6 +1,11 @@
 // send-messages (test tool): publishes test traffic on one channel.
 //   --poses N [--rate HZ]          N valid pose_t messages (seq 0..N-1, a moving pose)
-//   --bad truncated|oversized|wrongtype|garbage   one malformed message of that kind
+//   --bad truncated|oversized|wrongtype|garbage [--type pose|frame|keyframe|map]
+//         one malformed message of that kind, made from a valid message of --type
+//   --bad keyframe-foreign-map   a valid keyframe (id 3) of map 424242
+//   --bad map-stale --map-id ID  a valid map snapshot of map ID with version 1 (the past)
+//   --bad map-foreign-map        a valid map snapshot of map 424242, version 10^9
+//   --bad frame-wrong-size       a valid 320x240 frame (the cameras are 640x480)
 // Used by the integration tests to drive pose-logger and the SLAM processes.
 #include <chrono>
 #include <cmath>
@@ -32,13 +37,56 @@ std::vector<uint8_t> encodePose(int64_t seq) {
   return bytes;
 }
 
-std::vector<uint8_t> badMessage(const std::string& kind) {
-  std::vector<uint8_t> bytes = encodePose(0);
+template <typename T>
+std::vector<uint8_t> encode(const T& msg) {
+  std::vector<uint8_t> bytes(msg.getEncodedSize());
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+RgbdFrame smallFrame(int width, int height) {
+  RgbdFrame frame;
+  frame.colour = cv::Mat(height, width, CV_8UC3, cv::Scalar(90, 120, 150));
+  frame.depth = cv::Mat(height, width, CV_16UC1, cv::Scalar(5000));
+  frame.depth_scale = 5000.0;
+  frame.camera_name = "test";
+  return frame;
+}
+
+std::vector<uint8_t> keyframeBytes(int64_t map_id) {
+  KeyframeData keyframe;
+  keyframe.map_id = map_id;
+  keyframe.id = 3;
+  keyframe.grey = cv::Mat(480, 640, CV_8UC1, cv::Scalar(100));
+  return encode(toLcm(keyframe));
+}
+
+std::vector<uint8_t> mapBytes(int64_t map_id, int64_t version) {
+  MapUpdate update;
+  update.map_id = map_id;
+  update.version = version;
+  update.is_snapshot = true;
+  return encode(toLcm(update));
+}
+
+std::vector<uint8_t> validMessage(const std::string& type) {
+  if (type == "frame") return encode(toLcm(smallFrame(640, 480), FrameEncoding{}));
+  if (type == "keyframe") return keyframeBytes(1);
+  if (type == "map") return mapBytes(1, 5);
+  return encodePose(0);
+}
+
+std::vector<uint8_t> badMessage(const std::string& kind, const std::string& type, int64_t map_id) {
+  if (kind == "keyframe-foreign-map") return keyframeBytes(424242);
+  if (kind == "map-stale") return mapBytes(map_id, 1);
+  if (kind == "map-foreign-map") return mapBytes(424242, 1000000000);
+  if (kind == "frame-wrong-size") return encode(toLcm(smallFrame(320, 240), FrameEncoding{}));
+  std::vector<uint8_t> bytes = validMessage(type);
   if (kind == "truncated") bytes.resize(bytes.size() / 2);
   else if (kind == "oversized") bytes.resize(bytes.size() + 1000, 0x5A);
   else if (kind == "wrongtype") {
     rgbdslam::status_t status;
-    status.component = "not-a-pose";
+    status.component = "not-a-" + type;
     status.num_counters = status.num_timings = 0;
     bytes.resize(status.getEncodedSize());
     status.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
@@ -55,7 +103,9 @@ int main(int argc, char** argv) {
   cli.option("channel", "NAME", "channel", "SLAM_POSE");
   cli.option("poses", "N", "valid pose_t messages to send", "0");
   cli.option("rate", "HZ", "messages per second", "200");
-  cli.option("bad", "KIND", "one malformed message: truncated|oversized|wrongtype|garbage");
+  cli.option("bad", "KIND", "one bad message: truncated|oversized|wrongtype|garbage|keyframe-foreign-map|map-stale|map-foreign-map|frame-wrong-size");
+  cli.option("type", "T", "message type the malformed kinds start from: pose|frame|keyframe|map", "pose");
+  cli.option("map-id", "ID", "map id for --bad map-stale", "1");
   addLcmUrlOption(cli);
   if (Status s = cli.parse(argc, argv); !s) return usageError("send-messages", s.error());
   if (cli.helpRequested()) return std::cout << cli.helpText(), 0;
@@ -63,7 +113,7 @@ int main(int argc, char** argv) {
   if (!lcm) return usageError("send-messages", lcm.error());
   const std::string channel = cli.get("channel");
   if (cli.has("bad")) {
-    const auto bytes = badMessage(cli.get("bad"));
+    const auto bytes = badMessage(cli.get("bad"), cli.get("type"), *cli.getInt("map-id"));
     (*lcm)->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   }
   const long n = *cli.getInt("poses");

@@ -14,6 +14,18 @@ enum class TrackingState : int8_t {
   kRelocalised = 4,   // first pose after recovering
 };
 
+// The state's name as logs and status reports show it ("tracking", "lost", ...).
+inline const char* toString(TrackingState state) {
+  switch (state) {
+    case TrackingState::kInitialising: return "initialising";
+    case TrackingState::kTracking: return "tracking";
+    case TrackingState::kDodgy: return "dodgy";
+    case TrackingState::kLost: return "lost";
+    case TrackingState::kRelocalised: return "relocalised";
+  }
+  return "unknown";
+}
+
 struct PoseEstimate {
   int64_t utime = 0;     // the frame's acquisition time [us]
   int64_t seq = 0;       // the frame's sequence number

@@ -1,0 +1,51 @@
+#include "common/slam_config.h"
+
+#include <iostream>
+#include <sstream>
+
+namespace rgbdslam {
+namespace {
+
+// Splits "a=1,b=2" into assignments; commas inside values are not supported.
+std::vector<std::string> splitAssignments(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+}  // namespace
+
+void addSlamConfigOptions(CommandLine& cli) {
+  cli.option("mode", "M", "mono | depth-init | depth-ba (overrides slam.mode)", "depth-ba");
+  cli.option("config", "FILE", "SLAM configuration (see config/slam.yaml)", "built-in defaults");
+  cli.option("set", "SECTION.KEY=VALUE", "override one configuration option (repeatable by commas)");
+  cli.option("print-config", "yaml|markdown", "print the effective configuration (loadable YAML, or a table) and exit");
+}
+
+Expected<SlamConfig> loadSlamConfig(const CommandLine& cli) {
+  SlamConfig config;
+  config.registry = std::make_unique<OptionRegistry>();
+  config.slam->bind(config.registry.get());
+  if (cli.has("config")) {
+    if (Status s = config.registry->load(cli.get("config")); !s) return Error{s.error()};
+  }
+  for (const std::string& assignment : splitAssignments(cli.get("set"))) {
+    if (Status s = config.registry->set(assignment); !s) return Error{"--set: " + s.error()};
+  }
+  if (cli.has("mode")) {
+    if (Status s = config.registry->set("slam.mode=" + cli.get("mode")); !s) return Error{"--mode: " + s.error()};
+  }
+  return config;
+}
+
+bool printConfigIfAsked(const CommandLine& cli, const SlamConfig& config) {
+  if (!cli.has("print-config")) return false;
+  const bool markdown = cli.get("print-config") == "markdown";
+  std::cout << (markdown ? config.registry->markdownTable() : config.registry->yamlText());
+  return true;
+}
+
+}  // namespace rgbdslam

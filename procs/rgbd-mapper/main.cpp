@@ -1,0 +1,92 @@
+// rgbd-mapper: the ground station's mapper. Integrates the tracker's keyframes (SLAM_KEYFRAME)
+// in order, runs bundle adjustment, publishes the map (SLAM_MAP) and its health
+// (MAPPER_STATUS), and journals its keyframes so a restart loses nothing. See --help.
+#include <filesystem>
+#include <iostream>
+
+#include "common/cli.h"
+#include "common/process.h"
+#include "common/slam_config.h"
+#include "rgbd-mapper/mapper_node.h"
+#include "rgbdslam/camera/calibration_io.h"
+
+using namespace rgbdslam;
+
+namespace {
+
+CommandLine makeCommandLine() {
+  CommandLine cli("rgbd-mapper", "Builds the map from the tracker's keyframes and publishes it.");
+  cli.option("camera", "FILE", "camera calibration YAML (the tracker's camera)");
+  addSlamConfigOptions(cli);
+  cli.option("state-dir", "DIR", "folder of the persisted map (journal); 'none' persists nothing", "mapper-state");
+  cli.flag("fresh", "start a new map: move an existing journal aside (map.journal.old) first");
+  cli.option("keyframe-channel", "NAME", "keyframes from the tracker", "SLAM_KEYFRAME");
+  cli.option("map-channel", "NAME", "map versions to the tracker", "SLAM_MAP");
+  cli.option("status-channel", "NAME", "health reports", "MAPPER_STATUS");
+  cli.option("map-period", "S", "refinement deltas at most this often (a newly integrated keyframe's at once) [s]", "1");
+  cli.option("tracker-status-channel", "NAME", "the tracker's health reports (its map version)", "SLAM_STATUS");
+  cli.option("snapshot-period", "S", "full map snapshots at least this often (also when the tracker is stuck behind a lost delta) [s]", "30");
+  cli.option("status-period", "S", "status reports this often [s]", "1");
+  addLcmUrlOption(cli);
+  return cli;
+}
+
+Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli) {
+  MapperNodeOptions o;
+  o.keyframe_channel = cli.get("keyframe-channel");
+  o.map_channel = cli.get("map-channel");
+  o.status_channel = cli.get("status-channel");
+  o.tracker_status_channel = cli.get("tracker-status-channel");
+  o.state_dir = cli.get("state-dir") == "none" ? "" : cli.get("state-dir");
+  for (auto [name, target] : {std::pair{"map-period", &o.map_period_s},
+                              std::pair{"snapshot-period", &o.snapshot_period_s},
+                              std::pair{"status-period", &o.status_period_s}}) {
+    auto value = cli.getDouble(name);
+    if (!value || *value <= 0) return Error{std::string("--") + name + " must be a positive number of seconds"};
+    *target = *value;
+  }
+  return o;
+}
+
+// --fresh: keeps the previous journal as map.journal.old rather than deleting it.
+Status moveJournalAside(const std::string& dir) {
+  std::error_code error;
+  const std::filesystem::path journal = std::filesystem::path(dir) / "map.journal";
+  if (!std::filesystem::exists(journal)) return Status{};
+  std::filesystem::rename(journal, journal.string() + ".old", error);
+  if (error) return Error{"cannot move " + journal.string() + " aside: " + error.message()};
+  return Status{};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CommandLine cli = makeCommandLine();
+  if (Status parsed = cli.parse(argc, argv); !parsed) return usageError("rgbd-mapper", parsed.error());
+  if (cli.helpRequested()) {
+    std::cout << cli.helpText();
+    return 0;
+  }
+  auto config = loadSlamConfig(cli);
+  if (!config) return usageError("rgbd-mapper", config.error());
+  if (printConfigIfAsked(cli, *config)) return 0;
+  if (!cli.has("camera")) return usageError("rgbd-mapper", "--camera is required (see --help)");
+  auto camera = loadCamera(cli.get("camera"));
+  if (!camera) return usageError("rgbd-mapper", camera.error());
+  auto options = nodeOptions(cli);
+  if (!options) return usageError("rgbd-mapper", options.error());
+  if (cli.has("fresh") && !options->state_dir.empty()) {
+    if (Status moved = moveJournalAside(options->state_dir); !moved) return usageError("rgbd-mapper", moved.error());
+  }
+  auto lcm = openLcm(cli.get("lcm-url"));
+  if (!lcm) return usageError("rgbd-mapper", lcm.error());
+  std::cerr << "rgbd-mapper: camera " << camera->name << ", state "
+            << (options->state_dir.empty() ? "not persisted" : options->state_dir) << ", lcm-url "
+            << cli.get("lcm-url") << "\nconfiguration:\n" << config->registry->describe();
+
+  MapperNode node(lcm->get(), *camera, config->slam->mapper, *parseSlamMode(config->slam->mode), *options);
+  if (Status restored = node.restore(); !restored) return usageError("rgbd-mapper", restored.error());
+  node.run(installStopHandlers());
+  node.printSummary();
+  return 0;
+}

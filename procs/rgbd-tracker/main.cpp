@@ -1,0 +1,119 @@
+// rgbd-tracker: the onboard tracker. Tracks every RGBD_FRAME against its replica of the map,
+// publishes SLAM_POSE, sends keyframes to the mapper (SLAM_KEYFRAME, re-sent until
+// acknowledged) and applies its map versions (SLAM_MAP). See --help.
+#include <iostream>
+#include <random>
+
+#include "common/cli.h"
+#include "common/process.h"
+#include "common/slam_config.h"
+#include "rgbd-tracker/tracker_node.h"
+#include "rgbdslam/camera/calibration_io.h"
+
+using namespace rgbdslam;
+
+namespace {
+
+CommandLine makeCommandLine() {
+  CommandLine cli("rgbd-tracker", "Tracks the camera against the mapper's map, at camera rate.");
+  cli.option("camera", "FILE", "camera calibration YAML");
+  addSlamConfigOptions(cli);
+  cli.option("link-url", "URL", "LCM URL of the link to the mapper (keyframes, maps, status)", "the --lcm-url");
+  cli.option("map-id", "ID", "this session's map id (> 0)", "random");
+  cli.option("frame-channel", "NAME", "frames in (local bus)", "RGBD_FRAME");
+  cli.option("pose-channel", "NAME", "poses out (local bus)", "SLAM_POSE");
+  cli.option("keyframe-channel", "NAME", "keyframes out (link)", "SLAM_KEYFRAME");
+  cli.option("map-channel", "NAME", "maps in (link)", "SLAM_MAP");
+  cli.option("status-channel", "NAME", "health reports (link)", "SLAM_STATUS");
+  cli.option("resend-period", "S", "first re-send of an unacknowledged keyframe after this; the interval then doubles [s]", "1");
+  cli.option("resend-max-period", "S", "the re-send interval grows to this at most [s]", "4");
+  cli.option("resend-max", "N", "keyframes re-sent at one time at most, oldest first", "2");
+  cli.option("status-period", "S", "status reports this often [s]", "1");
+  cli.option("max-backlog", "N", "frames waiting to be tracked at most; a newer frame pushes out the oldest [frames]", "2");
+  cli.option("keyframe-grey", "jpeg|png", "keyframe image on the link (png is lossless)", "jpeg");
+  cli.option("keyframe-jpeg-quality", "Q", "JPEG quality of keyframe images [1-100]", "75");
+  cli.option("keyframe-depth", "full|half|quarter", "keyframe depth on the link: every pixel, every 2nd or every 4th pixel and row (the centre of each block)", "quarter");
+  cli.option("exit-after-idle", "S", "finish when no frame came for this long; 0 = run until stopped [s]", "0");
+  cli.option("ack-wait", "S", "when finishing, wait this long for keyframe acknowledgements [s]", "10");
+  addLcmUrlOption(cli);
+  return cli;
+}
+
+Expected<TrackerNodeOptions> nodeOptions(const CommandLine& cli) {
+  TrackerNodeOptions o;
+  o.frame_channel = cli.get("frame-channel"), o.pose_channel = cli.get("pose-channel");
+  o.keyframe_channel = cli.get("keyframe-channel"), o.map_channel = cli.get("map-channel");
+  o.status_channel = cli.get("status-channel");
+  for (auto [name, target, min] : {std::tuple{"resend-period", &o.resend_period_s, 1e-3},
+                                   std::tuple{"resend-max-period", &o.resend_max_period_s, 1e-3},
+                                   std::tuple{"status-period", &o.status_period_s, 1e-3},
+                                   std::tuple{"exit-after-idle", &o.exit_after_idle_s, 0.0},
+                                   std::tuple{"ack-wait", &o.ack_wait_s, 0.0}}) {
+    auto value = cli.getDouble(name);
+    if (!value || *value < min) return Error{std::string("--") + name + " must be a number of seconds >= " + std::to_string(min)};
+    *target = *value;
+  }
+  auto backlog = cli.getInt("max-backlog");
+  if (!backlog || *backlog < 1) return Error{"--max-backlog must be >= 1"};
+  o.max_backlog_frames = static_cast<int>(*backlog);
+  auto resend_max = cli.getInt("resend-max");
+  if (!resend_max || *resend_max < 1) return Error{"--resend-max must be >= 1"};
+  o.resend_max = static_cast<int>(*resend_max);
+  const std::string grey = cli.get("keyframe-grey"), depth = cli.get("keyframe-depth");
+  if (grey != "jpeg" && grey != "png") return Error{"--keyframe-grey must be jpeg or png"};
+  if (depth != "full" && depth != "half" && depth != "quarter") return Error{"--keyframe-depth must be full, half or quarter"};
+  auto quality = cli.getInt("keyframe-jpeg-quality");
+  if (!quality || *quality < 1 || *quality > 100) return Error{"--keyframe-jpeg-quality must be 1-100"};
+  o.encoding = KeyframeEncoding{grey == "jpeg", static_cast<int>(*quality), depth == "full" ? 1 : depth == "half" ? 2 : 4};
+  return o;
+}
+
+Expected<int64_t> mapId(const CommandLine& cli) {
+  if (!cli.has("map-id")) {
+    std::random_device random;
+    std::uniform_int_distribution<int64_t> id(1, (int64_t{1} << 62));
+    return id(random);
+  }
+  auto id = cli.getInt("map-id");
+  if (!id || *id <= 0) return Error{"--map-id must be a positive integer"};
+  return static_cast<int64_t>(*id);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CommandLine cli = makeCommandLine();
+  if (Status parsed = cli.parse(argc, argv); !parsed) return usageError("rgbd-tracker", parsed.error());
+  if (cli.helpRequested()) {
+    std::cout << cli.helpText();
+    return 0;
+  }
+  auto config = loadSlamConfig(cli);
+  if (!config) return usageError("rgbd-tracker", config.error());
+  if (printConfigIfAsked(cli, *config)) return 0;
+  if (!cli.has("camera")) return usageError("rgbd-tracker", "--camera is required (see --help)");
+  auto camera = loadCamera(cli.get("camera"));
+  if (!camera) return usageError("rgbd-tracker", camera.error());
+  auto options = nodeOptions(cli);
+  if (!options) return usageError("rgbd-tracker", options.error());
+  auto map_id = mapId(cli);
+  if (!map_id) return usageError("rgbd-tracker", map_id.error());
+  auto local = openLcm(cli.get("lcm-url"));
+  if (!local) return usageError("rgbd-tracker", local.error());
+  std::unique_ptr<lcm::LCM> own_link;
+  if (cli.has("link-url") && cli.get("link-url") != cli.get("lcm-url")) {
+    auto link = openLcm(cli.get("link-url"));
+    if (!link) return usageError("rgbd-tracker", link.error());
+    own_link = std::move(*link);
+  }
+  lcm::LCM* link = own_link ? own_link.get() : local->get();
+  std::cerr << "rgbd-tracker: camera " << camera->name << ", map " << *map_id << ", lcm-url "
+            << cli.get("lcm-url") << ", link-url " << (own_link ? cli.get("link-url") : "(the same)")
+            << "\nconfiguration:\n" << config->registry->describe();
+
+  TrackerNode node(local->get(), link, *camera, config->slam->tracker, *parseSlamMode(config->slam->mode),
+                   *map_id, *options);
+  const int status = node.run(installStopHandlers());
+  node.printSummary();
+  return status;
+}

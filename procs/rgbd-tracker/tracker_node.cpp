@@ -1,0 +1,243 @@
+#include "rgbd-tracker/tracker_node.h"
+
+#include <poll.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+
+#include "common/process.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr int kLoopTimeoutMs = 20;  // [ms] longest wait for a message between timer checks
+constexpr int kMaxHandlePerLoop = 64;  // messages handled before tracking the newest frame
+
+double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+bool hasPose(TrackResult::Status status) {
+  return status == TrackResult::Status::kInitialised || status == TrackResult::Status::kTracked ||
+         status == TrackResult::Status::kRelocalised;
+}
+
+}  // namespace
+
+TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& camera,
+                         const TrackerOptions& tracker_options, SlamMode mode, int64_t map_id,
+                         TrackerNodeOptions options)
+    : local_(local), link_(link), options_(std::move(options)),
+      tracker_(camera, tracker_options, mode, map_id), map_id_(map_id) {}
+
+int TrackerNode::run(const std::atomic<bool>& stop) {
+  local_->subscribe(options_.frame_channel, &TrackerNode::onFrame, this);
+  link_->subscribe(options_.map_channel, &TrackerNode::onMap, this);
+  std::optional<Clock::time_point> finishing_since;
+  while (!stop) {
+    handleAvailable(kLoopTimeoutMs);
+    const auto now = Clock::now();
+    resendDue(now);
+    if (last_status_ == Clock::time_point{} || msBetween(last_status_, now) >= options_.status_period_s * 1000) {
+      last_status_ = now;
+      publishStatus();
+    }
+    if (options_.exit_after_idle_s <= 0 || counters_.frames == 0) continue;
+    if (msBetween(last_frame_, now) < options_.exit_after_idle_s * 1000) {
+      finishing_since.reset();
+      continue;
+    }
+    if (!finishing_since) finishing_since = now;
+    if (unacked_.empty() || msBetween(*finishing_since, now) >= options_.ack_wait_s * 1000) break;
+  }
+  publishStatus();
+  return unacked_.empty() ? 0 : 1;
+}
+
+// Handles everything that has arrived (map messages at once; frames into the backlog), then
+// tracks the oldest frame of the backlog.
+void TrackerNode::handleAvailable(int timeout_ms) {
+  const int count = local_ == link_ ? 1 : 2;
+  for (int round = 0; round < kMaxHandlePerLoop; ++round) {
+    pollfd fds[2] = {{local_->getFileno(), POLLIN, 0}, {link_->getFileno(), POLLIN, 0}};
+    if (::poll(fds, count, round == 0 && backlog_.empty() ? timeout_ms : 0) <= 0) break;
+    if (fds[0].revents & POLLIN) local_->handle();
+    if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
+  }
+  if (backlog_.empty()) return;
+  std::vector<uint8_t> bytes = std::move(backlog_.front());
+  backlog_.pop_front();
+  trackFrame(bytes);
+}
+
+void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+  last_frame_ = Clock::now();
+  while (static_cast<int>(backlog_.size()) >= options_.max_backlog_frames) {
+    backlog_.pop_front();  // overtaken before it was tracked
+    ++counters_.frames_skipped;
+  }
+  const auto* data = static_cast<const uint8_t*>(buffer->data);
+  backlog_.emplace_back(data, data + buffer->data_size);
+}
+
+void TrackerNode::trackFrame(const std::vector<uint8_t>& bytes) {
+  const std::string channel = options_.frame_channel;
+  auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(bytes.data(), bytes.size());
+  auto frame = msg ? fromLcm(*msg) : Expected<RgbdFrame>(Error{msg.error()});
+  if (!frame) {
+    ++counters_.bad_frame_messages;
+    std::cerr << "rgbd-tracker: ignoring a bad message on " << channel << ": " << frame.error() << "\n";
+    return;
+  }
+  ++counters_.frames;
+  TrackResult result = tracker_.track(*frame);
+  if (result.status == TrackResult::Status::kBadFrame) {
+    ++counters_.bad_frames;
+    std::cerr << "rgbd-tracker: frame " << frame->seq << " skipped: " << result.error << "\n";
+    return;
+  }
+  track_ms_.add(result.track_ms);
+  if (result.status == TrackResult::Status::kLost) ++counters_.lost;
+  if (hasPose(result.status)) ++counters_.poses;
+  state_ = result.pose.state;
+  result.pose.utime = frame->utime;
+  result.pose.seq = frame->seq;
+  result.pose.latency_ms = (utimeNow() - frame->utime) * 1e-3;
+  const rgbdslam::pose_t pose = toLcm(result.pose);
+  local_->publish(options_.pose_channel, &pose);
+  latency_ms_.add(result.pose.latency_ms);
+  if (result.new_keyframe) sendKeyframe(*result.new_keyframe);
+}
+
+void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
+  const rgbdslam::keyframe_t msg = toLcm(keyframe, options_.encoding);
+  Outgoing out;
+  out.bytes.resize(msg.getEncodedSize());
+  msg.encode(out.bytes.data(), 0, static_cast<int>(out.bytes.size()));
+  out.created = Clock::now();
+  out.interval_s = options_.resend_period_s;
+  out.next_send = out.created + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(out.interval_s));
+  out.sends = 1;
+  link_->publish(options_.keyframe_channel, out.bytes.data(), static_cast<unsigned>(out.bytes.size()));
+  ++counters_.keyframes;
+  ++counters_.keyframe_sends;
+  counters_.keyframe_bytes += static_cast<long>(out.bytes.size());
+  created_[keyframe.id] = out.created;
+  unacked_[keyframe.id] = std::move(out);
+}
+
+void TrackerNode::resendDue(Clock::time_point now) {
+  int sent = 0;
+  for (auto& [id, out] : unacked_) {
+    if (sent >= options_.resend_max) break;
+    if (now < out.next_send) continue;
+    link_->publish(options_.keyframe_channel, out.bytes.data(), static_cast<unsigned>(out.bytes.size()));
+    out.interval_s = std::min(2 * out.interval_s, std::max(options_.resend_max_period_s, options_.resend_period_s));
+    out.next_send = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(out.interval_s));
+    ++out.sends;
+    ++sent;
+    ++counters_.keyframe_sends;
+    counters_.keyframe_bytes += static_cast<long>(out.bytes.size());
+  }
+}
+
+void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  auto msg = decodeMessage<rgbdslam::map_t>(buffer->data, buffer->data_size);
+  auto update = msg ? fromLcm(*msg) : Expected<MapUpdate>(Error{msg.error()});
+  if (!update) {
+    ++counters_.bad_map_messages;
+    std::cerr << "rgbd-tracker: ignoring a bad message on " << channel << ": " << update.error() << "\n";
+    return;
+  }
+  ++counters_.maps_received;
+  if (update->map_id != map_id_) {
+    ++counters_.maps_foreign;
+    std::cerr << "rgbd-tracker: ignoring map version " << update->version << " of map " << update->map_id
+              << " (this tracker's map is " << map_id_ << ")\n";
+    return;
+  }
+  newest_version_seen_ = std::max(newest_version_seen_, update->version);
+  const auto now = Clock::now();
+  for (KeyframeId id : update->acked_keyframes) {
+    auto it = unacked_.find(id);
+    if (it == unacked_.end()) continue;
+    ack_ms_.add(msBetween(it->second.created, now));
+    ++counters_.keyframes_acked;
+    unacked_.erase(it);
+  }
+  switch (tracker_.applyMapUpdate(*update)) {
+    case Tracker::UpdateStatus::kApplied: ++counters_.maps_applied; break;
+    case Tracker::UpdateStatus::kUnknownKeyframe: ++counters_.maps_unknown_keyframe; ++counters_.maps_applied; break;
+    case Tracker::UpdateStatus::kStale: ++counters_.maps_stale; return;
+    case Tracker::UpdateStatus::kMissingDelta: ++counters_.maps_missing_delta; return;
+    case Tracker::UpdateStatus::kForeignMap: ++counters_.maps_foreign; return;
+  }
+  for (KeyframeId id : update->acked_keyframes) {
+    auto it = created_.find(id);
+    if (it == created_.end()) continue;
+    in_map_ms_.add(msBetween(it->second, now));
+    created_.erase(it);
+  }
+}
+
+void TrackerNode::publishStatus() {
+  ComponentStatus status;
+  status.utime = utimeNow();
+  status.component = "rgbd-tracker";
+  status.state = toString(state_);
+  const Counters& c = counters_;
+  status.counters = {{"map_id", map_id_},
+                     {"map_version", tracker_.mapVersion()},
+                     {"map_version_newest_seen", newest_version_seen_},
+                     {"keyframes", c.keyframes},
+                     {"keyframes_acked", c.keyframes_acked},
+                     {"keyframes_unacked", static_cast<int64_t>(unacked_.size())},
+                     {"keyframe_sends", c.keyframe_sends},
+                     {"keyframe_bytes", c.keyframe_bytes},
+                     {"points", static_cast<int64_t>(tracker_.map().numPoints())},
+                     {"frames", c.frames},
+                     {"frames_skipped", c.frames_skipped},
+                     {"poses", c.poses},
+                     {"lost_frames", c.lost},
+                     {"bad_frames", c.bad_frames},
+                     {"bad_frame_messages", c.bad_frame_messages},
+                     {"bad_map_messages", c.bad_map_messages},
+                     {"maps_received", c.maps_received},
+                     {"maps_applied", c.maps_applied},
+                     {"maps_stale", c.maps_stale},
+                     {"maps_foreign", c.maps_foreign},
+                     {"maps_missing_delta", c.maps_missing_delta},
+                     {"maps_unknown_keyframe", c.maps_unknown_keyframe}};
+  status.timings_ms = {{"track_ms_median", track_ms_.quantile(0.5)},
+                       {"track_ms_p99", track_ms_.quantile(0.99)},
+                       {"latency_ms_median", latency_ms_.quantile(0.5)},
+                       {"latency_ms_p99", latency_ms_.quantile(0.99)},
+                       {"keyframe_ack_ms_median", ack_ms_.quantile(0.5)},
+                       {"keyframe_ack_ms_max", ack_ms_.quantile(1.0)},
+                       {"keyframe_in_map_ms_median", in_map_ms_.quantile(0.5)},
+                       {"keyframe_in_map_ms_max", in_map_ms_.quantile(1.0)}};
+  const rgbdslam::status_t msg = toLcm(status);
+  link_->publish(options_.status_channel, &msg);
+}
+
+void TrackerNode::printSummary() const {
+  const Counters& c = counters_;
+  // Key-value lines on stdout (for scripts), as rgbd-slam prints its summary.
+  std::printf("frames_skipped %ld\n", c.frames_skipped);
+  std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
+              c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
+  std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
+              c.keyframes, c.keyframes_acked, unacked_.size(), c.keyframe_sends, c.keyframe_bytes);
+  std::printf("map_version_newest_seen %lld\n", static_cast<long long>(newest_version_seen_));
+  std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",
+              static_cast<long long>(tracker_.mapVersion()), c.maps_received, c.maps_applied, c.maps_stale,
+              c.maps_missing_delta, c.maps_foreign);
+  std::printf("track_ms_median %.3f\ntrack_ms_p99 %.3f\nlatency_ms_median %.3f\nlatency_ms_p99 %.3f\n",
+              track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
+  std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",
+              ack_ms_.quantile(0.5), ack_ms_.quantile(1.0), in_map_ms_.quantile(0.5), in_map_ms_.quantile(1.0));
+  std::fflush(stdout);
+}
+
+}  // namespace rgbdslam
