@@ -1,6 +1,8 @@
 #include "rgbd-capture/capture.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <sstream>
 #include <thread>
@@ -39,6 +41,9 @@ Expected<CaptureOptions> CaptureOptions::fromCommandLine(const CommandLine& cli)
   o.max_frames = *max_frames;
   o.lcm_url = cli.get("lcm-url");
   o.groundtruth_out = cli.get("groundtruth-out");
+  const std::string clock = cli.get("clock");
+  if (clock != "recorded" && clock != "host") return Error{"--clock must be recorded or host"};
+  o.host_clock = clock == "host";
   return o;
 }
 
@@ -50,7 +55,7 @@ std::string CaptureOptions::describe() const {
       << (step ? ", one frame per Enter" : "") << "\n  channel " << channel << "\n  colour "
       << (encoding.jpeg_colour ? "jpeg q" + std::to_string(encoding.jpeg_quality) : "raw")
       << "\n  depth " << (encoding.zlib_depth ? "zlib" : "raw") << "\n  max-frames "
-      << max_frames << "\n  lcm-url " << lcm_url << "\n";
+      << max_frames << "\n  clock " << (host_clock ? "host" : "recorded") << "\n  lcm-url " << lcm_url << "\n";
   return out.str();
 }
 
@@ -65,13 +70,44 @@ Expected<std::unique_ptr<Capture>> Capture::create(const CaptureOptions& options
   if (!source) return Error{source.error()};
   auto lcm = openLcm(options.lcm_url);
   if (!lcm) return Error{lcm.error()};
+  std::unique_ptr<Capture> capture(new Capture(options, camera, std::move(*source), std::move(*lcm)));
   if (!options.groundtruth_out.empty()) {
-    const std::optional<Trajectory> groundtruth = groundTruthFor(options.source);
-    if (!groundtruth) return Error{"--groundtruth-out: " + options.source + " has no ground truth"};
-    if (Status s = writeTumTrajectory(options.groundtruth_out, *groundtruth); !s) return Error{s.error()};
+    capture->groundtruth_ = groundTruthFor(options.source);
+    if (!capture->groundtruth_) return Error{"--groundtruth-out: " + options.source + " has no ground truth"};
+    // With the host clock the stamps are known once the frames are published: written then.
+    if (!options.host_clock) {
+      if (Status s = capture->writeGroundtruth(); !s) return Error{s.error()};
+    }
   }
-  return std::unique_ptr<Capture>(
-      new Capture(options, camera, std::move(*source), std::move(*lcm)));
+  return capture;
+}
+
+// Re-stamps the ground truth like the frames: each time maps through the (recorded, host)
+// pairs of the published frames, linearly between them and by the nearest shift outside;
+// ground truth of a recording that published nothing is not written.
+Status Capture::writeGroundtruth() const {
+  Trajectory out = *groundtruth_;
+  if (options_.host_clock) {
+    if (stamps_.empty()) return Status{};
+    for (TimedPose& pose : out) {
+      const auto recorded = static_cast<int64_t>(std::llround(pose.t * 1e6));
+      auto after = std::lower_bound(stamps_.begin(), stamps_.end(), std::make_pair(recorded, int64_t{0}));
+      double shift_us;
+      if (after == stamps_.begin()) {
+        shift_us = static_cast<double>(stamps_.front().second - stamps_.front().first);
+      } else if (after == stamps_.end()) {
+        shift_us = static_cast<double>(stamps_.back().second - stamps_.back().first);
+      } else {
+        const auto before = after - 1;
+        const double f = after->first == before->first ? 0.0 :
+            static_cast<double>(recorded - before->first) / static_cast<double>(after->first - before->first);
+        shift_us = (1 - f) * static_cast<double>(before->second - before->first) +
+                   f * static_cast<double>(after->second - after->first);
+      }
+      pose.t = (static_cast<double>(recorded) + shift_us) * 1e-6;
+    }
+  }
+  return writeTumTrajectory(options_.groundtruth_out, out);
 }
 
 Capture::Capture(CaptureOptions options, std::optional<PinholeCamera> camera,
@@ -132,6 +168,12 @@ int Capture::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (!waitForTurn(result.frame, stop)) break;
+    if (options_.host_clock) {
+      const int64_t recorded = result.frame.utime;
+      result.frame.utime = utimeNow();
+      // Recorded times increase; a source that repeats one keeps the first pairing.
+      if (stamps_.empty() || recorded > stamps_.back().first) stamps_.emplace_back(recorded, result.frame.utime);
+    }
     const rgbdslam::rgbd_frame_t msg = toLcm(result.frame, options_.encoding);
     if (lcm_->publish(options_.channel, &msg) != 0) {
       std::cerr << "rgbd-capture: error: publishing frame " << result.frame.seq << " failed\n";
@@ -139,6 +181,12 @@ int Capture::run(const std::atomic<bool>& stop) {
       continue;
     }
     ++published_;
+  }
+  if (options_.host_clock && groundtruth_) {
+    if (Status s = writeGroundtruth(); !s) {
+      std::cerr << "rgbd-capture: error: " << s.error() << "\n";
+      failed = true;
+    }
   }
   std::cerr << "rgbd-capture: published " << published_ << " frames, " << bad_ << " bad\n";
   return (failed || bad_ > 0) ? 1 : 0;

@@ -12,6 +12,7 @@
 #include "common/lcm_conversions.h"
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/io/frame_source.h"
+#include "rgbdslam/io/trajectory_io.h"
 
 namespace rgbdslam {
 
@@ -24,6 +25,11 @@ struct CaptureOptions {
   FrameEncoding encoding;
   long max_frames = 0;                // 0 = all
   std::string groundtruth_out;        // where to write the source's ground truth; empty = nowhere
+  // false: frames keep their recorded utime; true: each frame is stamped with the host clock
+  // when it is published (as a live camera stamps at acquisition; latency downstream is then
+  // measurable, and the renderer's own time is not counted). The ground truth is written at
+  // the end with the same stamps (times between frames mapped linearly).
+  bool host_clock = false;
   std::string lcm_url;
 
   static Expected<CaptureOptions> fromCommandLine(const CommandLine& cli);
@@ -48,6 +54,9 @@ class Capture {
   std::optional<PinholeCamera> camera_;
   std::unique_ptr<FrameSource> source_;
   std::unique_ptr<lcm::LCM> lcm_;
+  Status writeGroundtruth() const;
+  std::optional<Trajectory> groundtruth_;  // to write, when --groundtruth-out is given
+  std::vector<std::pair<int64_t, int64_t>> stamps_;  // (recorded, host) utime per published frame
   long published_ = 0, bad_ = 0;
   int64_t first_utime_ = 0, first_wall_us_ = 0;
 };

@@ -23,6 +23,7 @@ CommandLine makeCommandLine() {
   cli.option("depth", "raw|zlib", "depth encoding on the wire (both lossless)", "zlib");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
   cli.option("groundtruth-out", "FILE", "write the source's ground truth (synth:, tum:) to FILE in TUM format");
+  cli.option("clock", "recorded|host", "frame utime: as recorded, or shifted so the first frame gets the host clock at publication (live-camera stamps; the ground truth is shifted alike)", "recorded");
   cli.flag("list-devices", "list attached Kinect/PrimeSense USB devices and OpenNI2 devices, then exit");
   addLcmUrlOption(cli);
   return cli;

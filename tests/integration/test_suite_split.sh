@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# The onboard/ground split in two namespaces joined by a veth pair (link.sh): a clean run,
+# then the same with 10 % random loss each way and 50 ms delay each way. With the impaired
+# link the tracker publishes a pose for at least 99 % of the frames, every keyframe is
+# acknowledged by the end, and the ATE is within 1.5x of the clean run.
+source "$(dirname "$0")/common.sh"
+source "$(dirname "$0")/link.sh"
+source "$(dirname "$0")/split.sh"
+require_netns
+link_up
+seq=synth:room,frames=300
+
+split_start "$WORK/clean" 0
+split_capture "$WORK/clean" "$seq"
+split_finish "$WORK/clean"
+split_report "$WORK/clean" clean
+
+link_loss 10
+split_start "$WORK/lossy" 50
+split_capture "$WORK/lossy" "$seq"
+split_finish "$WORK/lossy"
+split_report "$WORK/lossy" "10 % loss + 50 ms each way"
+
+clean_ate=$(split_value ate_rmse_m "$WORK/clean/eval.txt")
+for run in clean lossy; do
+  t=$WORK/$run/tracker.out
+  poses=$(tail -n +2 "$WORK/$run/trajectory.csv" | wc -l)
+  [ "$poses" -ge 297 ] || fail "$run: poses for $poses of 300 frames (< 99 %)"
+  [ "$(split_value keyframes_unacked "$t")" = 0 ] || fail "$run: keyframes left unacknowledged: $(cat "$t")"
+  [ "$(split_value keyframes "$t")" -gt 0 ] || fail "$run: no keyframes"
+done
+lossy_ate=$(split_value ate_rmse_m "$WORK/lossy/eval.txt")
+awk -v a="$lossy_ate" -v b="$clean_ate" 'BEGIN { exit !(a <= 1.5 * b) }' \
+  || fail "ATE with loss $lossy_ate m is above 1.5x the clean run's $clean_ate m"
+echo "PASS"
