@@ -34,6 +34,25 @@ Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url) {
   return lcm;
 }
 
+RawSubscription::RawSubscription(lcm::LCM* lcm, const std::string& channel, Handler handler)
+    : lcm_(lcm), handler_(std::move(handler)) {
+  subscription_ = lcm_subscribe(
+      lcm_->getUnderlyingLCM(), channel.c_str(),
+      [](const lcm_recv_buf_t* rbuf, const char* name, void* self) {
+        const lcm::ReceiveBuffer buffer{rbuf->data, rbuf->data_size, rbuf->recv_utime};
+        static_cast<RawSubscription*>(self)->handler_(&buffer, name);
+      },
+      this);
+}
+
+void RawSubscription::setQueueCapacity(int messages) {
+  if (subscription_) lcm_subscription_set_queue_capacity(subscription_, messages);
+}
+
+RawSubscription::~RawSubscription() {
+  if (subscription_) lcm_unsubscribe(lcm_->getUnderlyingLCM(), subscription_);
+}
+
 int usageError(const std::string& program, const std::string& message) {
   std::cerr << program << ": error: " << message << "\n";
   return 2;

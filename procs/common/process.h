@@ -5,6 +5,7 @@
 //   subscribe handlers -> while (!stop) lcm.handleTimeout(...).
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <string>
@@ -21,6 +22,37 @@ int64_t utimeNow();
 
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);
+
+// Subscribes object->method to a channel through LCM's C API, returning the subscription
+// (kept by the caller for as long as it may be called; its destructor unsubscribes).
+// Used instead of lcm-cpp's member-function subscribe: with liblcm 1.3.1 that path handed
+// every process's callback a corrupt handler pointer (AddressSanitizer: heap-buffer-overflow
+// in the callback; pose-logger, rgbd-tracker, rgbd-mapper alike), while this one runs clean
+// under AddressSanitizer.
+class RawSubscription {
+ public:
+  using Handler = std::function<void(const lcm::ReceiveBuffer*, const std::string&)>;
+  RawSubscription(lcm::LCM* lcm, const std::string& channel, Handler handler);
+  ~RawSubscription();
+  // Messages LCM holds for this subscription before it drops (LCM's default: 30).
+  void setQueueCapacity(int messages);
+  RawSubscription(const RawSubscription&) = delete;
+  RawSubscription& operator=(const RawSubscription&) = delete;
+
+ private:
+  lcm::LCM* lcm_;
+  Handler handler_;
+  lcm_subscription_t* subscription_ = nullptr;
+};
+
+template <typename T>
+std::unique_ptr<RawSubscription> subscribeRaw(lcm::LCM* lcm, const std::string& channel, T* object,
+                                              void (T::*method)(const lcm::ReceiveBuffer*, const std::string&)) {
+  return std::make_unique<RawSubscription>(
+      lcm, channel, [object, method](const lcm::ReceiveBuffer* buffer, const std::string& name) {
+        (object->*method)(buffer, name);
+      });
+}
 
 // Prints "program: error: message" to stderr and returns the exit status for bad usage (2).
 int usageError(const std::string& program, const std::string& message);

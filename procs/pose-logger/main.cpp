@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
             << "\n  channel " << cli.get("channel") << "\n  lcm-url " << cli.get("lcm-url") << "\n";
 
   PoseLogger logger(std::move(*writer));
-  (*lcm)->subscribe(cli.get("channel"), &PoseLogger::onMessage, &logger);
+  auto subscription = subscribeRaw(lcm->get(), cli.get("channel"), &logger, &PoseLogger::onMessage);
   const std::atomic<bool>& stop = installStopHandlers();
   while (!stop) (*lcm)->handleTimeout(kHandleTimeoutMs);
   logger.printSummary();

@@ -8,7 +8,6 @@
 namespace rgbdslam {
 namespace {
 
-constexpr int kRestoreRefineSteps = 8;     // refinement after re-integrating the journal
 constexpr int kLcmTimeoutMs = 10;          // [ms] outbox flush period when nothing arrives
 constexpr auto kWorkerTick = std::chrono::milliseconds(50);  // worker wake-up when idle
 
@@ -66,9 +65,11 @@ Status MapperNode::restore() {
     next_id_ = keyframe->id + 1;
     ++counters_.restored;
   }
-  for (int i = 0; i < kRestoreRefineSteps && mapper_.refine(); ++i) {
-  }
+  // No refinement here: the restored map is published at once, and the worker refines it
+  // afterwards like any other (a tracker waits for it meanwhile).
   version_ = contents.last_version;
+  published_version_ = version_;
+  converged_ = counters_.restored == 0;
   counters_.integrated = counters_.restored.load();
   if (counters_.restored > 0) {
     std::cerr << "rgbd-mapper: restored map " << map_id_ << " from " << journal_->path() << ": "
@@ -79,22 +80,8 @@ Status MapperNode::restore() {
 }
 
 void MapperNode::run(const std::atomic<bool>& stop) {
-  // The C API: through lcm-cpp's member-function subscribe (liblcm 1.3.1) this process's
-  // callback received a subscription record in place of its own (AddressSanitizer:
-  // heap-buffer-overflow in the handler, and corrupted bundle-adjustment options without
-  // it); the same handler through lcm_subscribe runs clean under AddressSanitizer.
-  lcm_subscribe(lcm_->getUnderlyingLCM(), options_.keyframe_channel.c_str(),
-                [](const lcm_recv_buf_t* rbuf, const char* channel, void* self) {
-                  const lcm::ReceiveBuffer buffer{rbuf->data, rbuf->data_size, rbuf->recv_utime};
-                  static_cast<MapperNode*>(self)->onKeyframe(&buffer, channel);
-                },
-                this);
-  lcm_subscribe(lcm_->getUnderlyingLCM(), options_.tracker_status_channel.c_str(),
-                [](const lcm_recv_buf_t* rbuf, const char* channel, void* self) {
-                  const lcm::ReceiveBuffer buffer{rbuf->data, rbuf->data_size, rbuf->recv_utime};
-                  static_cast<MapperNode*>(self)->onTrackerStatus(&buffer, channel);
-                },
-                this);
+  auto keyframes = subscribeRaw(lcm_, options_.keyframe_channel, this, &MapperNode::onKeyframe);
+  auto tracker_status = subscribeRaw(lcm_, options_.tracker_status_channel, this, &MapperNode::onTrackerStatus);
   worker_ = std::thread([this] { workerLoop(); });
   while (!stop) {
     lcm_->handleTimeout(kLcmTimeoutMs);
@@ -222,8 +209,19 @@ bool MapperNode::integrateNext() {
     std::lock_guard<std::mutex> lock(mutex_);
     map_id_ = queued.keyframe.map_id;
     next_id_ = queued.keyframe.id + 1;
-    // Keyframes queued from before a gap that is now closed stay queued; older ones are gone.
+    // Keyframes queued from before a gap that is now closed stay queued; older ones are gone,
+    // and so are keyframes of another map that arrived before this map had a name.
     queue_.erase(queue_.begin(), queue_.lower_bound(next_id_));
+    for (auto it = queue_.begin(); it != queue_.end();) {
+      if (it->second.keyframe.map_id == map_id_) {
+        ++it;
+        continue;
+      }
+      ++counters_.foreign;
+      std::cerr << "rgbd-mapper: dropping keyframe " << it->first << " of map " << it->second.keyframe.map_id
+                << ": this mapper holds map " << map_id_ << "\n";
+      it = queue_.erase(it);
+    }
   }
   ++counters_.integrated;
   integrate_ms_.add(result.integrate_ms);

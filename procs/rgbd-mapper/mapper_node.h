@@ -14,8 +14,7 @@
 //   a delta was lost (the tracker cannot apply later ones): the next publication is a
 //   snapshot. So a lossy link costs one snapshot per loss, not a snapshot every few seconds.
 // Only the LCM thread touches LCM: the worker hands what it publishes to it through an
-// outbox (liblcm 1.3's udpm provider corrupted its subscription table here when one thread
-// published while another was inside handle(); seen with AddressSanitizer).
+// outbox, so no LCM call ever races another.
 #include <atomic>
 #include <condition_variable>
 #include <lcm/lcm-cpp.hpp>

@@ -32,9 +32,9 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id) {}
 
 int TrackerNode::run(const std::atomic<bool>& stop) {
-  local_->subscribe(options_.frame_channel, &TrackerNode::onFrame, this);
-  link_->subscribe(options_.map_channel, &TrackerNode::onMap, this);
-  std::optional<Clock::time_point> finishing_since;
+  auto frames = subscribeRaw(local_, options_.frame_channel, this, &TrackerNode::onFrame);
+  auto maps = subscribeRaw(link_, options_.map_channel, this, &TrackerNode::onMap);
+  Clock::time_point finishing_since{};  // when the frames stopped; epoch: they have not
   while (!stop) {
     handleAvailable(kLoopTimeoutMs);
     const auto now = Clock::now();
@@ -45,11 +45,11 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
     }
     if (options_.exit_after_idle_s <= 0 || counters_.frames == 0) continue;
     if (msBetween(last_frame_, now) < options_.exit_after_idle_s * 1000) {
-      finishing_since.reset();
+      finishing_since = Clock::time_point{};
       continue;
     }
-    if (!finishing_since) finishing_since = now;
-    if (unacked_.empty() || msBetween(*finishing_since, now) >= options_.ack_wait_s * 1000) break;
+    if (finishing_since == Clock::time_point{}) finishing_since = now;
+    if (unacked_.empty() || msBetween(finishing_since, now) >= options_.ack_wait_s * 1000) break;
   }
   publishStatus();
   return unacked_.empty() ? 0 : 1;
@@ -169,9 +169,19 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
   switch (tracker_.applyMapUpdate(*update)) {
     case Tracker::UpdateStatus::kApplied: ++counters_.maps_applied; break;
     case Tracker::UpdateStatus::kUnknownKeyframe: ++counters_.maps_unknown_keyframe; ++counters_.maps_applied; break;
-    case Tracker::UpdateStatus::kStale: ++counters_.maps_stale; return;
-    case Tracker::UpdateStatus::kMissingDelta: ++counters_.maps_missing_delta; return;
-    case Tracker::UpdateStatus::kForeignMap: ++counters_.maps_foreign; return;
+    case Tracker::UpdateStatus::kStale:
+      ++counters_.maps_stale;
+      std::cerr << "rgbd-tracker: ignoring stale map version " << update->version << " (holding "
+                << tracker_.mapVersion() << "; a repeat, or from the past)\n";
+      return;
+    case Tracker::UpdateStatus::kMissingDelta:
+      ++counters_.maps_missing_delta;
+      std::cerr << "rgbd-tracker: map version " << update->version << " is a delta after a lost one (holding "
+                << tracker_.mapVersion() << "); waiting for a snapshot\n";
+      return;
+    case Tracker::UpdateStatus::kForeignMap:
+      ++counters_.maps_foreign;
+      return;
   }
   for (KeyframeId id : update->acked_keyframes) {
     auto it = created_.find(id);

@@ -68,3 +68,62 @@ split_report() {
        "track median $(split_value track_ms_median "$t") ms"
   grep -v '^#' "$dir/link.txt" 2>/dev/null | sed "s/^/  link: /" || true
 }
+
+# --- Additions for the outage / mapper-restart tests (the functions above are unchanged) ---
+
+# split_finish_frames DIR FRAMES: split_finish for a run of FRAMES frames (slam-eval's
+# coverage counts against FRAMES; split_finish assumes 300). Also writes DIR/tracker.exit
+# (the tracker's exit status) and DIR/tracker_exit_utime (when it was seen gone, host clock).
+split_finish_frames() {
+  local dir=$1 frames=$2 i status=0
+  for ((i = 0; i < 400; i++)); do  # the tracker's own bound is 2 s idle + 20 s for acks
+    kill -0 "$SPLIT_TRACKER" 2>/dev/null || break
+    sleep 0.05
+  done
+  date +%s%6N > "$dir/tracker_exit_utime"
+  kill -INT "$SPLIT_TRACKER" 2>/dev/null || true
+  wait "$SPLIT_TRACKER" || status=$?
+  echo "$status" > "$dir/tracker.exit"
+  sleep 0.3
+  kill -INT "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
+  wait "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
+  "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/trajectory.txt" --frames "$frames" > "$dir/eval.txt" \
+    || fail "slam-eval failed on $dir"
+  "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
+}
+
+# split_kill_mapper: SIGKILL to the mapper of split_start (nothing flushed, no summary).
+split_kill_mapper() {
+  kill -KILL "$SPLIT_MAPPER" 2>/dev/null || fail "the mapper (pid $SPLIT_MAPPER) was not running"
+  wait "$SPLIT_MAPPER" 2>/dev/null || true
+}
+
+# split_restart_mapper DIR [MAPPER_ARGS...]: starts the mapper again as split_start does (same
+# --state-dir, so it resumes from its journal); its output is appended to DIR/mapper.{out,err}.
+# SPLIT_MAPPER becomes the new pid, so split_finish stops this one.
+split_restart_mapper() {
+  local dir=$1
+  shift
+  bg_ground SPLIT_MAPPER "$PROCS/rgbd-mapper" --camera "$SRC/config/cameras/synthetic.yaml" \
+      --state-dir "$dir/mapper-state" --lcm-url "$LINK_URL" "$@" >> "$dir/mapper.out" 2>> "$dir/mapper.err"
+}
+
+# split_mapper_summary DIR: the mapper's last summary line (printed at SIGINT) as key-value
+# lines: mapper_map, mapper_version, mapper_keyframes, mapper_restored, mapper_points,
+# mapper_received, mapper_duplicates, mapper_out_of_order, mapper_foreign, mapper_bad_messages,
+# mapper_bad_keyframes, mapper_maps_published, mapper_snapshots.
+split_mapper_summary() {
+  grep '^rgbd-mapper: map ' "$1/mapper.err" | tail -1 | sed -E \
+    's/^rgbd-mapper: map ([0-9]+) version ([0-9]+): ([0-9]+) keyframes \(([0-9]+) restored\), ([0-9]+) points; received ([0-9]+), duplicates ([0-9]+), out of order ([0-9]+), foreign map ([0-9]+), bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_map \1\nmapper_version \2\nmapper_keyframes \3\nmapper_restored \4\nmapper_points \5\nmapper_received \6\nmapper_duplicates \7\nmapper_out_of_order \8\nmapper_foreign \9/;t more;d;:more' \
+    || true
+  # sed has nine back-references at most: the rest from a second pass.
+  grep '^rgbd-mapper: map ' "$1/mapper.err" | tail -1 | sed -E \
+    's/.*, bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_bad_messages \1\nmapper_bad_keyframes \2\nmapper_maps_published \3\nmapper_snapshots \4/;t;d' \
+    || true
+}
+
+# require_lcm_log: sets LCMLOG, the command reading lcm-logger files (tests/integration/lcm_log.py).
+require_lcm_log() {
+  command -v python3 > /dev/null || fail "python3 is missing (scripts/setup installs it; tests/integration/lcm_log.py needs it)"
+  LCMLOG="python3 $(dirname "${BASH_SOURCE[0]}")/lcm_log.py"
+}

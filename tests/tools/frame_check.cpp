@@ -89,7 +89,7 @@ int main(int argc, char** argv) {
   auto lcm = openLcm(cli.get("lcm-url"));
   if (!lcm) return usageError("frame-check", lcm.error());
   FrameChecker checker(std::move(*expected));
-  (*lcm)->subscribe(cli.get("channel"), &FrameChecker::onMessage, &checker);
+  auto subscription = subscribeRaw(lcm->get(), cli.get("channel"), &checker, &FrameChecker::onMessage);
   if (cli.has("ready")) std::ofstream(cli.get("ready")) << "ready\n";
   const long count = *cli.getInt("count");
   const int64_t deadline = utimeNow() + static_cast<int64_t>(*cli.getDouble("timeout") * 1e6);

@@ -92,7 +92,8 @@ int receive(lcm::LCM& lcm, const CommandLine& cli) {
   PingCounter counter(count);
   // LCM drops messages for a subscription after 30 queued by default; on a busy machine
   // that would count as link loss.
-  lcm.subscribe(cli.get("channel"), &PingCounter::onMessage, &counter)->setQueueCapacity(100000);
+  auto subscription = subscribeRaw(&lcm, cli.get("channel"), &counter, &PingCounter::onMessage);
+  subscription->setQueueCapacity(100000);
   if (cli.has("ready")) std::ofstream(cli.get("ready")) << "ready\n";
   const int64_t deadline = utimeNow() + static_cast<int64_t>(*cli.getDouble("timeout") * 1e6);
   const int64_t idle_us = static_cast<int64_t>(*cli.getDouble("idle") * 1e6);
