@@ -165,6 +165,10 @@ int report(const CliOptions& options, const rgbdslam::Trajectory& groundtruth,
            const rgbdslam::Trajectory& estimate, const rgbdslam::EvalResult& result) {
   const std::string json = rgbdslam::toJson(result);
   std::fputs(options.print_json ? json.c_str() : rgbdslam::toKeyValueText(result).c_str(), stdout);
+  // The paper's Table I: where the run ends, relative to where it started.
+  if (const auto end = rgbdslam::endPointError(groundtruth, estimate, result.options.max_dt_s); end && !options.print_json) {
+    std::fputs(rgbdslam::toKeyValueText(*end).c_str(), stdout);
+  }
   if (!options.json_out.empty()) {
     if (Status written = writeTextFile(options.json_out, json); !written) {
       return fail(kExitEvalFailed, written.error());

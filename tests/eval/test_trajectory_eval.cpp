@@ -221,6 +221,45 @@ TEST(TrajectoryEval, ConstantRotationDriftGivesKnownRpe) {
   EXPECT_NEAR(result->rpe_per_m.rot_deg.rmse, 2.0, 1e-6);
 }
 
+TEST(TrajectoryEval, EndPointErrorOfARigidlyMovedTrajectoryIsZero) {
+  // The map starts wherever the first posed frame is: another world frame is no error.
+  const Trajectory groundtruth = helixGroundTruth();
+  const auto error = endPointError(groundtruth, inOtherWorld(groundtruth, kT_est_gt), 0.02);
+  ASSERT_TRUE(error.ok()) << error.error();
+  EXPECT_LT(error->position_m, 1e-9);
+  EXPECT_LT(error->rotation_deg, 1e-6);
+  EXPECT_GT(error->distance_m, 10.0);
+}
+
+TEST(TrajectoryEval, EndPointErrorOfConstantDriftIsItsIntegral) {
+  // 20 s at 0.5 m/s (10 m minus one frame); 1 cm/s sideways drift, then 1 deg/s of yaw.
+  const Trajectory groundtruth = straightGroundTruth();
+  const double duration_s = 399 * kFramePeriod_s;
+  const auto sideways = endPointError(groundtruth, driftingEstimate(groundtruth, 0.01, 0.0), 0.02);
+  ASSERT_TRUE(sideways.ok()) << sideways.error();
+  EXPECT_NEAR(sideways->position_m, 0.01 * duration_s, 1e-9);
+  EXPECT_NEAR(sideways->distance_m, 0.5 * duration_s, 1e-9);
+  EXPECT_NEAR(sideways->position_percent, 2.0, 1e-6);  // 1 cm/s of 0.5 m/s
+  EXPECT_LT(sideways->rotation_deg, 1e-9);
+  const auto turning = endPointError(groundtruth, driftingEstimate(groundtruth, 0.0, 1.0), 0.02);
+  ASSERT_TRUE(turning.ok()) << turning.error();
+  EXPECT_NEAR(turning->rotation_deg, duration_s, 1e-6);
+  EXPECT_NE(toKeyValueText(*sideways).find("final_position_error_percent 2.0000"),
+            std::string::npos);
+}
+
+TEST(TrajectoryEval, EndPointErrorUsesOnlyTheAssociatedSpan) {
+  // The estimate covers the middle half: distance and error are over that span only.
+  const Trajectory groundtruth = straightGroundTruth();
+  const Trajectory drifting = driftingEstimate(groundtruth, 0.01, 0.0);
+  const Trajectory middle(drifting.begin() + 100, drifting.begin() + 300);
+  const auto error = endPointError(groundtruth, middle, 0.02);
+  ASSERT_TRUE(error.ok()) << error.error();
+  EXPECT_NEAR(error->distance_m, 0.5 * 199 * kFramePeriod_s, 1e-9);
+  EXPECT_NEAR(error->position_m, 0.01 * 199 * kFramePeriod_s, 1e-9);
+  EXPECT_FALSE(endPointError(groundtruth, Trajectory(drifting.begin(), drifting.begin() + 1), 0.02).ok());
+}
+
 TEST(TrajectoryEval, JsonAndTextCarryTheResults) {
   const Trajectory groundtruth = helixGroundTruth();
   Trajectory estimate = groundtruth;

@@ -62,5 +62,28 @@ TEST_F(KeyframePolicyTest, AnyCoveringKeyframeSuppresses) {
   EXPECT_TRUE(decide(translated(0.5)));
 }
 
+TEST_F(KeyframePolicyTest, FewPointsFoundWithDepthGiveAKeyframeWhereverTheCameraIs) {
+  options_.few_points = 60;
+  options_.few_points_min_frames = 3;
+  input_.frames_since_keyframe = 3;  // fewer than min_frames_between_keyframes
+  input_.points_found = 59;
+  input_.points_from_depth = true;
+  EXPECT_TRUE(decide(translated(0.0)));  // on top of keyframe 0
+  input_.points_found = 60;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.points_found = 20;
+  input_.points_from_depth = false;  // mono: a keyframe would bring no points at once
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.points_from_depth = true;
+  input_.frames_since_keyframe = 2;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.frames_since_keyframe = 3;
+  input_.tracking_good = false;
+  EXPECT_FALSE(decide(translated(0.0)));
+  options_.few_points = 0;  // off
+  input_.tracking_good = true;
+  EXPECT_FALSE(decide(translated(0.0)));
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+
+#include <cmath>
 #include <random>
+
+#include "rgbdslam/mapping/ba_residuals.h"
 
 namespace rgbdslam {
 namespace {
@@ -57,6 +62,58 @@ TEST(PoseOptimizer, RecoversPerturbationFromExactCorrespondences) {
     EXPECT_EQ(result.inliers_2d, 100);
     EXPECT_EQ(result.inliers_depth, use_depth ? 100 : 0);
   }
+}
+
+TEST(PoseOptimizer, UncertaintyMatchesTheSpreadUnderMeasurementNoise) {
+  // Observations with Gaussian noise at their model sigmas: the spread of the fitted poses
+  // in the worst direction is what poseUncertainty() predicts from the information matrix.
+  const Problem problem = makeProblem(60, 2);
+  const PoseOptimizerOptions options;
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::Matrix3d translation_scatter = Eigen::Matrix3d::Zero(), rotation_scatter = Eigen::Matrix3d::Zero();
+  PoseUncertainty predicted;
+  constexpr int kTrials = 300;
+  for (int trial = 0; trial < kTrials; ++trial) {
+    std::vector<PoseObservation> noisy = problem.observations;
+    for (PoseObservation& obs : noisy) {
+      obs.uv += sigma2d(obs.level) * Eigen::Vector2d(gauss(rng), gauss(rng));
+      obs.depth += sigmaDepth(obs.depth, options.depth_sigma_coefficient) * gauss(rng);
+    }
+    const PoseOptimizerResult result = optimisePose(problem.camera, problem.T_c_w_true, noisy, options);
+    ASSERT_TRUE(result.ok);
+    const Vec6 xi = (result.T_c_w * problem.T_c_w_true.inverse()).log();
+    translation_scatter += xi.head<3>() * xi.head<3>().transpose() / kTrials;
+    rotation_scatter += xi.tail<3>() * xi.tail<3>().transpose() / kTrials;
+    if (trial == 0) predicted = poseUncertainty(result.information);
+  }
+  const double measured_t = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(translation_scatter).eigenvalues().maxCoeff());
+  const double measured_r = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(rotation_scatter).eigenvalues().maxCoeff());
+  EXPECT_GT(predicted.translation_m, 0.0);
+  EXPECT_NEAR(measured_t / predicted.translation_m, 1.0, 0.3) << measured_t << " " << predicted.translation_m;
+  EXPECT_NEAR(measured_r / predicted.rotation_rad, 1.0, 0.3) << measured_r << " " << predicted.rotation_rad;
+}
+
+TEST(PoseOptimizer, UncertaintyIsInfiniteWhenThePoseIsNotFixed) {
+  EXPECT_TRUE(std::isinf(poseUncertainty(Eigen::Matrix<double, 6, 6>::Zero()).translation_m));
+  // Three points on one ray through the camera centre, without depth: rotation about and
+  // translation along the ray are free.
+  Problem problem = makeProblem(3, 3);
+  const Vec3 direction = problem.T_c_w_true.inverse().rotationMatrix() * Vec3(0.1, 0.05, 1.0);
+  const Vec3 centre = problem.T_c_w_true.inverse().translation();
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  std::vector<PoseObservation> on_ray;
+  for (double d : {1.0, 2.0, 3.0}) {
+    const Vec3 p_w = centre + d * direction;
+    on_ray.push_back({p_w, *problem.camera.project(problem.T_c_w_true * p_w), 0, 0.0});
+  }
+  on_ray.push_back(on_ray[0]);
+  PoseOptimizerOptions options;
+  options.use_depth = false;
+  const PoseOptimizerResult result = optimisePose(problem.camera, problem.T_c_w_true, on_ray, options);
+  if (result.ok) information = result.information;
+  const PoseUncertainty u = poseUncertainty(information);
+  EXPECT_TRUE(std::isinf(u.translation_m) || u.translation_m > 1e3) << u.translation_m;
 }
 
 TEST(PoseOptimizer, IgnoresTwentyPercentGrossOutliers) {

@@ -302,4 +302,36 @@ std::string toKeyValueText(const EvalResult& result) {
   return out;
 }
 
+Expected<EndPointError> endPointError(const Trajectory& groundtruth, const Trajectory& estimate,
+                                      double max_dt_s) {
+  const std::vector<PosePair> pairs = associateByTime(groundtruth, estimate, max_dt_s);
+  if (pairs.size() < 2) {
+    return Error{"end-point error needs 2 associated poses, got " + std::to_string(pairs.size())};
+  }
+  const PosePair& first = pairs.front();
+  const PosePair& last = pairs.back();  // pairs are sorted by estimate time
+  const SE3 gt_motion =
+      groundtruth[first.gt_index].T_w_c.inverse() * groundtruth[last.gt_index].T_w_c;
+  const SE3 est_motion = estimate[first.est_index].T_w_c.inverse() * estimate[last.est_index].T_w_c;
+  const SE3 error = gt_motion.inverse() * est_motion;
+  const std::vector<double> travelled = travelledDistance(groundtruth);
+  EndPointError e;
+  e.position_m = error.translation().norm();
+  e.distance_m = travelled[last.gt_index] - travelled[first.gt_index];
+  e.position_percent = e.distance_m > 0.0 ? 100.0 * e.position_m / e.distance_m : 0.0;
+  e.rotation_deg = logSO3(error.rotationMatrix()).norm() * kRadToDeg;
+  e.first_t = estimate[first.est_index].t;
+  e.last_t = estimate[last.est_index].t;
+  return e;
+}
+
+std::string toKeyValueText(const EndPointError& error) {
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                "final_position_error_m %.6f\nfinal_position_error_percent %.6f\n"
+                "final_rotation_error_deg %.6f\nfinal_distance_m %.6f\n",
+                error.position_m, error.position_percent, error.rotation_deg, error.distance_m);
+  return text;
+}
+
 }  // namespace rgbdslam

@@ -1,8 +1,16 @@
 #include "rgbdslam/mapping/data_association.h"
 
+#include <algorithm>
+
 #include "rgbdslam/image/patch.h"
 
 namespace rgbdslam {
+
+int flatCappedAcceptance(const Patch& patch, int max_zmssd, double flat_ratio) {
+  if (flat_ratio <= 0.0) return max_zmssd;
+  const double energy = patch.sum_sq - static_cast<double>(patch.sum) * patch.sum / kPatchArea;
+  return std::min(max_zmssd, static_cast<int>(flat_ratio * energy));
+}
 
 std::optional<Eigen::Matrix2d> patchWarp(const MapPoint& point, const Keyframe& source,
                                          const Keyframe& target, const PinholeCamera& camera) {
@@ -38,7 +46,9 @@ std::optional<Measurement> findPointInKeyframe(const MapPoint& point, const Keyf
   }
   const cv::Mat& image = target.pyramid.levels[level];
   const auto found = searchPatch(patch, image, target.corners[level], levelFromZero(*predicted, level),
-                                 options.search_radius_px, options.max_zmssd);
+                                 options.search_radius_px,
+                                 flatCappedAcceptance(patch, options.max_zmssd,
+                                                      options.max_zmssd_flat_ratio));
   if (!found) return std::nullopt;
   Eigen::Vector2d pos(found->x, found->y);
   if (!refineSubpixel(patch, image, &pos)) return std::nullopt;

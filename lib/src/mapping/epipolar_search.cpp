@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "rgbdslam/image/patch.h"
+#include "rgbdslam/mapping/data_association.h"
 
 namespace rgbdslam {
 namespace {
@@ -120,7 +121,9 @@ MatchOutcome bestDistinctMatch(const Patch& patch, const cv::Mat& image,
   const auto min_it = std::min_element(scored.begin(), scored.end(), [](const auto& a, const auto& b) {
     return std::tie(a.first, a.second.y, a.second.x) < std::tie(b.first, b.second.y, b.second.x);
   });
-  if (min_it->first >= options.max_zmssd) return MatchOutcome::kNoMatch;
+  if (min_it->first >= flatCappedAcceptance(patch, options.max_zmssd, options.max_zmssd_flat_ratio)) {
+    return MatchOutcome::kNoMatch;
+  }
   int second = INT_MAX;
   for (const auto& [score, c] : scored) {
     const cv::Point2i d = c - min_it->second;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <set>
 
@@ -23,6 +24,8 @@ void MapperOptions::bind(OptionRegistry* r) {
   r->bind(m, "max_global_ba_keyframes", &max_global_ba_keyframes, 2, 100000, "keyframes", "above this, global BA optimises only the newest ones");
   r->bind(m, "epipolar_min_depth_m", &epipolar_min_depth_m, 0.01, 100.0, "m", "epipolar search: nearest depth along the ray");
   r->bind(m, "epipolar_max_depth_m", &epipolar_max_depth_m, 0.1, 1000.0, "m", "epipolar search: farthest depth along the ray");
+  r->bind(m, "epipolar_partner_distance_ratio", &epipolar_partner_distance_ratio, 0.0, 10.0, "-", "epipolar partner: the farthest keyframe within this times the median depth (0: the nearest)");
+  r->bind(m, "epipolar_partner_max_angle_deg", &epipolar_partner_max_angle_deg, 0.0, 180.0, "deg", "...whose optical axis is within this angle of the new keyframe's");
   r->bind(m, "epipolar_max_points", &epipolar_max_points, 0, 10000, "corners", "corners without depth tried per new keyframe");
   r->bind(m, "epipolar_min_shi_tomasi", &epipolar_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "weaker corners are not tried");
   r->bind(m, "epipolar_min_separation_px", &epipolar_min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
@@ -31,6 +34,7 @@ void MapperOptions::bind(OptionRegistry* r) {
   r->bind(m, "epipolar_min_parallax_deg", &epipolar_min_parallax_deg, 0.0, 90.0, "deg", "smaller ray angles do not triangulate");
   r->bind(m, "epipolar_max_reprojection_px", &epipolar_max_reprojection_px, 0.1, 20.0, "level px", "triangulated point's error in either view");
   r->bind(m, "max_zmssd_per_pixel", &max_zmssd_per_pixel, 1, 65025, "grey^2", "patch acceptance (ZMSSD / 64) for epipolar search and re-finding");
+  r->bind(m, "max_zmssd_flat_ratio", &max_zmssd_flat_ratio, 0.0, 2.0, "-", "...and below this times the template's zero-mean energy, which a textureless patch exceeds (0: off)");
   r->bind(m, "refind_search_radius_px", &refind_search_radius_px, 1, 50, "level px", "re-finding: search radius around the prediction");
   r->bind(m, "min_good_measurements", &min_good_measurements, 1, 100, "measurements", "points with fewer good measurements are culled");
   r->bind(m, "keep_source_only_keyframes", &keep_source_only_keyframes, 0, 1000, "keyframes", "source-only points survive while their keyframe is this recent");
@@ -114,6 +118,7 @@ class Mapper::Impl {
   void integrate(const KeyframeData& data, MapperResult* result);
   void addPoint(const MapPoint& point);
   void addMeasurement(KeyframeId kf, Measurement m);
+  KeyframeId epipolarPartner(const Keyframe& kf) const;
   int addEpipolarPoints(const Keyframe& kf);
   BaResult runBa(const std::set<KeyframeId>& free_keyframes, const std::atomic<bool>* interrupt);
   std::set<KeyframeId> localWindow(const Keyframe& kf) const;
@@ -229,14 +234,38 @@ void Mapper::Impl::addMeasurement(KeyframeId kf, Measurement m) {
   map_.addMeasurement(kf, m);
 }
 
-int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
-  KeyframeId other_id = -1;
+// The partner for epipolar search: the nearest keyframe, unless keyframes are dense (the
+// camera moving forward into a view with few points takes one every few frames); then the
+// one farthest away within epipolar_partner_distance_ratio * median depth whose optical axis
+// is within epipolar_partner_max_angle_deg, so that points have parallax to triangulate.
+KeyframeId Mapper::Impl::epipolarPartner(const Keyframe& kf) const {
+  KeyframeId nearest = -1;
   for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, 2)) {
     if (id != kf.id) {
-      other_id = id;
+      nearest = id;
       break;
     }
   }
+  if (nearest < 0 || options_.epipolar_partner_distance_ratio <= 0.0) return nearest;
+  const double max_distance = options_.epipolar_partner_distance_ratio * kf.median_depth;
+  const double min_cos = std::cos(options_.epipolar_partner_max_angle_deg * M_PI / 180.0);
+  const Vec3 axis = kf.T_w_c.rotationMatrix().col(2);
+  KeyframeId best = nearest;
+  double best_distance =
+      (map_.keyframe(nearest)->T_w_c.translation() - kf.T_w_c.translation()).norm();
+  for (const auto& [id, other] : map_.keyframes()) {
+    if (id == kf.id) continue;
+    const double distance = (other->T_w_c.translation() - kf.T_w_c.translation()).norm();
+    if (distance <= best_distance || distance > max_distance) continue;
+    if (axis.dot(other->T_w_c.rotationMatrix().col(2)) < min_cos) continue;
+    best = id;
+    best_distance = distance;
+  }
+  return best;
+}
+
+int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
+  const KeyframeId other_id = epipolarPartner(kf);
   if (other_id < 0 || options_.epipolar_max_points <= 0) return 0;
   EpipolarOptions eo;
   eo.min_depth_m = options_.epipolar_min_depth_m, eo.max_depth_m = options_.epipolar_max_depth_m;
@@ -245,6 +274,7 @@ int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
   eo.line_tolerance_px = options_.epipolar_line_tolerance_px;
   eo.distinctiveness = options_.epipolar_distinctiveness;
   eo.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
+  eo.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
   eo.min_parallax_deg = options_.epipolar_min_parallax_deg;
   eo.max_reprojection_px = options_.epipolar_max_reprojection_px;
   eo.skip_corners_with_depth = depthPointsAllowed(mode_, kf.id);
@@ -299,6 +329,7 @@ bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
   RefindOptions ro;
   ro.search_radius_px = options_.refind_search_radius_px;
   ro.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
+  ro.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
   bool added = false;
   while (!refind_queue_.empty() && !interrupted(interrupt)) {
     const PointId pid = refind_queue_.front();

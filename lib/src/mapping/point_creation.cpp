@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace rgbdslam {
 namespace {
@@ -80,16 +81,12 @@ struct Candidate {
   cv::Point2i corner;
 };
 
-}  // namespace
-
-std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
-                                            const DepthPointOptions& options, PointId first_id) {
-  std::vector<NewPoint> created;
-  if (keyframe.depth.empty()) return created;
-  SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
-  for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
-  const SE3& T_w_c = keyframe.T_w_c;
-  const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
+// One pass over the levels: the keyframe's maxima with Shi-Tomasi score >= min_score,
+// strongest first per level, that are free in 'grid' and have a stable depth.
+void addPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
+                        const DepthPointOptions& options, double min_score, size_t max_total,
+                        PointId first_id, bool dense, SeparationGrid* grid,
+                        std::vector<NewPoint>* created) {
   for (int level = 0; level < static_cast<int>(keyframe.corners.size()); ++level) {
     const cv::Mat& image = keyframe.pyramid.levels[level];
     std::vector<Candidate> candidates;
@@ -99,28 +96,48 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
         continue;
       }
       const float score = shiTomasiScore(image, c);
-      if (score >= options.min_shi_tomasi) candidates.push_back({score, c});
+      if (score >= min_score) candidates.push_back({score, c});
     }
     std::sort(candidates.begin(), candidates.end(),
               [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
     int added = 0;
     for (const Candidate& cand : candidates) {
-      if (added >= options.max_points_per_level) break;
+      if (added >= options.max_points_per_level || created->size() >= max_total) break;
       const Eigen::Vector2d uv = zeroFromLevel(Eigen::Vector2d(cand.corner.x, cand.corner.y), level);
-      if (!grid.isFree(uv)) continue;
+      if (!grid->isFree(uv)) continue;
       const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity, dense);
       if (!depth) continue;
       NewPoint np;
-      np.point.id = first_id + static_cast<PointId>(created.size());
-      np.point.p_w = T_w_c * camera.unproject(uv, *depth);
+      np.point.id = first_id + static_cast<PointId>(created->size());
+      np.point.p_w = keyframe.T_w_c * camera.unproject(uv, *depth);
       np.point.source_keyframe = keyframe.id;
       np.point.source_level = level;
       np.point.source_uv = uv;
       np.measurement = Measurement{np.point.id, uv, level, *depth};
-      created.push_back(np);
-      grid.occupy(uv);
+      created->push_back(np);
+      grid->occupy(uv);
       ++added;
     }
+  }
+}
+
+}  // namespace
+
+std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
+                                            const DepthPointOptions& options, PointId first_id) {
+  std::vector<NewPoint> created;
+  if (keyframe.depth.empty()) return created;
+  SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
+  for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
+  const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
+  addPointsFromDepth(keyframe, camera, options, options.min_shi_tomasi, SIZE_MAX, first_id, dense,
+                     &grid, &created);
+  const size_t measured = keyframe.measurements.size() + created.size();
+  const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
+  if (measured < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
+    // The second pass sees the strong corners again; they are taken or not free any more.
+    addPointsFromDepth(keyframe, camera, options, options.weak_min_shi_tomasi,
+                       created.size() + (wanted - measured), first_id, dense, &grid, &created);
   }
   return created;
 }

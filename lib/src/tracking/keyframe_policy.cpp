@@ -14,9 +14,12 @@ double rotationAngleDeg(const SE3& a, const SE3& b) {
 
 bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
                        const KeyframePolicyOptions& options) {
-  if (!input.tracking_good || input.frames_since_keyframe < options.min_frames_between_keyframes) {
-    return false;
+  if (!input.tracking_good) return false;
+  if (input.points_from_depth && input.points_found < options.few_points &&
+      input.frames_since_keyframe >= options.few_points_min_frames) {
+    return true;
   }
+  if (input.frames_since_keyframe < options.min_frames_between_keyframes) return false;
   if (!(input.median_depth_m > 0.0)) return false;
   const double max_distance = options.distance_ratio * input.median_depth_m;
   for (const auto& [id, keyframe] : map.keyframes()) {

@@ -91,12 +91,15 @@ namespace rgbdslam {
 
 namespace {
 
-// ZMSSD acceptance for one patch (PointSearchOptions::max_zmssd_energy_ratio).
+// ZMSSD acceptance for one patch (PointSearchOptions::max_zmssd_energy_ratio and
+// max_zmssd_flat_ratio).
 int acceptanceFor(const Patch& patch, const PointSearchOptions& options) {
   const double energy =
       patch.sum_sq - static_cast<double>(patch.sum) * patch.sum / kPatchArea;
-  return std::max(options.max_zmssd,
-                  static_cast<int>(options.max_zmssd_energy_ratio * energy));
+  const int accepted =
+      std::max(options.max_zmssd, static_cast<int>(options.max_zmssd_energy_ratio * energy));
+  if (options.max_zmssd_flat_ratio <= 0.0) return accepted;
+  return std::min(accepted, static_cast<int>(options.max_zmssd_flat_ratio * energy));
 }
 
 // The pixel within 'radius' [px] (Euclidean) of 'predicted' whose ZMSSD is smallest and

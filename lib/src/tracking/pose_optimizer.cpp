@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 
 #include "rgbdslam/mapping/ba_residuals.h"
 
@@ -66,6 +67,20 @@ double robustSigmaSquared(std::vector<double>* e2, double floor_sigma, double ca
   return sigma2;
 }
 
+PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information) {
+  PoseUncertainty u;
+  u.translation_m = u.rotation_rad = INFINITY;
+  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(information);
+  if (!lu.isInvertible()) return u;
+  const Eigen::Matrix<double, 6, 6> covariance = lu.inverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> t(covariance.topLeftCorner<3, 3>());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> r(covariance.bottomRightCorner<3, 3>());
+  if (t.info() != Eigen::Success || r.info() != Eigen::Success) return u;
+  u.translation_m = std::sqrt(std::max(0.0, t.eigenvalues().maxCoeff()));
+  u.rotation_rad = std::sqrt(std::max(0.0, r.eigenvalues().maxCoeff()));
+  return u;
+}
+
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,
                                  const PoseOptimizerOptions& options,
@@ -116,6 +131,7 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
     result.T_c_w = SE3::exp(xi) * result.T_c_w;
     result.iterations = iteration + 1;
     result.ok = true;
+    result.information = H;
     // Converged: stop, unless the capped scale has yet to be tried (jump to it).
     if (xi.norm() < options.converged_step) {
       if (capped || options.max_robust_sigma <= 0.0 || iteration + 1 >= options.iterations) break;

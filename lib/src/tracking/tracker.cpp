@@ -32,6 +32,7 @@ struct Attempt {
   double quality = 0.0;
   double median_depth_m = 0.0;  // of the found inliers
   bool did_coarse = false;      // the coarse stage ran
+  PoseUncertainty uncertainty;  // of the fine stage's pose (infinite when it failed)
 };
 
 // A fine-stage slot's search outcome, to restore an earlier attempt.
@@ -101,6 +102,9 @@ class Tracker::Impl {
                const RgbdFrame& frame, bool mark_inliers);
   void selectSubset(std::vector<PointSlot*>* slots, int max_count);
   bool isLost(const Attempt& attempt) const;
+  bool coarseWanted(const SE3& T_c_w_start);
+  bool poseFixed(const PoseUncertainty& uncertainty) const;
+  bool constrainsPose(const std::vector<NewPoint>& points) const;
   bool isReliable(const MapPoint& point) const {
     return point.times_projected < options_.unreliable_after_searches ||
            point.times_found >= options_.unreliable_found_ratio * point.times_projected;
@@ -144,8 +148,10 @@ class Tracker::Impl {
   std::vector<PointSlot*> visible_, stage_;
   std::vector<PoseObservation> observations_;
   std::vector<uint8_t> inliers_;
-  std::vector<double> depths_;
+  std::vector<double> depths_, displacements_;
   std::vector<SlotOutcome> outcome_;
+  // J^T W J of the last fine stage's pose fit (zero when it failed).
+  Eigen::Matrix<double, 6, 6> fine_information_ = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 // ---------------------------------------------------------------------------------------
@@ -207,6 +213,13 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
     result.status = TrackResult::Status::kNotInitialised;
     result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
                    std::to_string(options_.init_min_points) + " needed)";
+    return result;
+  }
+  // The points must fix the first pose as well as tracking requires of a frame.
+  if (!constrainsPose(points)) {
+    result.status = TrackResult::Status::kNotInitialised;
+    result.error = "no depth to initialise (" + std::to_string(points.size()) +
+                   " points do not fix the pose)";
     return result;
   }
   map_.addKeyframe(std::move(keyframe));
@@ -294,9 +307,43 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   return result;
 }
 
+// The coarse stage is for large image motion (PTAM: fast motion): the median displacement
+// of the visible points (projected at the start pose, slot->uv) from where the last pose
+// puts them.
+bool Tracker::Impl::coarseWanted(const SE3& T_c_w_start) {
+  if (options_.coarse_min_motion_px <= 0.0 || visible_.empty()) return true;
+  if (map_.numKeyframes() == 0) return true;
+  const SE3 T_last_start = T_c_w_ * T_c_w_start.inverse();
+  displacements_.clear();
+  for (const PointSlot* slot : visible_) {
+    const auto uv_last = camera_.project(T_last_start * slot->p_c);
+    if (uv_last) displacements_.push_back((*uv_last - slot->uv).norm());
+  }
+  if (displacements_.empty()) return true;
+  return median(&displacements_) >= options_.coarse_min_motion_px;
+}
+
 bool Tracker::Impl::isLost(const Attempt& attempt) const {
   return attempt.searched == 0 || attempt.quality < options_.quality_lost ||
-         attempt.found < options_.min_points_tracked;
+         attempt.found < options_.min_points_tracked || !poseFixed(attempt.uncertainty);
+}
+
+bool Tracker::Impl::poseFixed(const PoseUncertainty& uncertainty) const {
+  return uncertainty.translation_m <= options_.max_pose_sigma_m &&
+         uncertainty.rotation_rad <= options_.max_pose_sigma_deg * M_PI / 180.0;
+}
+
+// Whether new points from depth, measured in the frame that would become keyframe 0 (world
+// = camera), fix its pose: the pose fit at the identity gives the information matrix.
+bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points) const {
+  std::vector<PoseObservation> observations;
+  for (const NewPoint& np : points) {
+    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    observations.push_back({np.point.p_w, np.measurement.uv, np.measurement.level,
+                            options_.use_depth_in_pose ? np.measurement.depth : 0.0});
+  }
+  const PoseOptimizerResult fit = optimisePose(camera_, SE3(), observations, poseOptions());
+  return fit.ok && poseFixed(poseUncertainty(fit.information));
 }
 
 // Takes the attempt's pose, updates the motion model and point statistics, and decides
@@ -323,9 +370,12 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
       (state == TrackingState::kDodgy && options_.keyframes_while_dodgy &&
        depthPointsAllowed(mode_, next_keyframe_id_));
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
-                                  attempt.median_depth_m, result.pose.T_w_c};
-  const KeyframePolicyOptions policy{options_.min_frames_between_keyframes,
-                                     options_.keyframe_distance_ratio, options_.keyframe_angle_deg};
+                                  attempt.median_depth_m, result.pose.T_w_c, attempt.found,
+                                  depthPointsAllowed(mode_, next_keyframe_id_)};
+  const KeyframePolicyOptions policy{
+      options_.min_frames_between_keyframes, options_.keyframe_distance_ratio,
+      options_.keyframe_angle_deg, options_.keyframe_few_points,
+      options_.keyframe_few_points_min_frames};
   if (shouldAddKeyframe(map_, input, policy)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
@@ -365,7 +415,8 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
     if (slot->search_level >= options_.coarse_min_level) stage_.push_back(slot);
   }
   bool did_coarse = false;
-  if (allow_coarse && static_cast<int>(stage_.size()) >= options_.coarse_min_points) {
+  if (allow_coarse && static_cast<int>(stage_.size()) >= options_.coarse_min_points &&
+      coarseWanted(T_c_w_start)) {
     did_coarse = true;
     selectSubset(&stage_, options_.coarse_max_points);
     T_c_w = runStage(stage_, T_c_w, options_.coarse_radius_px, frame, false);
@@ -378,6 +429,7 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
 
   Attempt attempt;
   attempt.T_c_w = T_c_w;
+  attempt.uncertainty = poseUncertainty(fine_information_);
   attempt.did_coarse = did_coarse;
   depths_.clear();
   int reliable_searched = 0, reliable_found = 0;
@@ -416,6 +468,7 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
   search.radius_px = radius_px;
   search.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
   search.max_zmssd_energy_ratio = options_.max_zmssd_energy_ratio;
+  search.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
   search.dense_fallback = options_.search_dense_fallback;
   search.patch_cache_tolerance = options_.patch_cache_tolerance;
   searchPoints(slots, pyramid_, corners_, search);
@@ -429,6 +482,7 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
   }
   const PoseOptimizerResult fit =
       optimisePose(camera_, T_c_w, observations_, poseOptions(), &inliers_);
+  if (mark_inliers) fine_information_ = fit.information;
   if (!fit.ok) return T_c_w;
   if (mark_inliers) {
     for (size_t i = 0; i < found.size(); ++i) found[i]->found = inliers_[i] != 0;

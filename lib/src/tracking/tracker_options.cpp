@@ -18,6 +18,9 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "coarse search radius at the search level");
   r->bind(s, "coarse_min_points", &coarse_min_points, 3, 10000, "points",
           "fewer coarse candidates than this: skip the coarse stage");
+  r->bind(s, "coarse_min_motion_px", &coarse_min_motion_px, 0.0, 1000.0, "px",
+          "coarse stage only when the visible points move at least this much (median) between "
+          "the last pose and the start pose (0: always)");
   r->bind(s, "retry_without_coarse", &retry_without_coarse,
           "a frame tracked below quality_good after a coarse stage is tracked again from the "
           "prediction without it; the better of the two is kept");
@@ -29,6 +32,9 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "patch match accepted when ZMSSD / 64 is below this");
   r->bind(s, "max_zmssd_energy_ratio", &max_zmssd_energy_ratio, 0.0, 2.0, "",
           "...or when ZMSSD is below this times the template's zero-mean energy (0: off)");
+  r->bind(s, "max_zmssd_flat_ratio", &max_zmssd_flat_ratio, 0.0, 2.0, "",
+          "...and in any case only when ZMSSD is below this times the template's zero-mean "
+          "energy, which a textureless image patch exceeds (0: off)");
   r->bind(s, "search_dense_fallback", &search_dense_fallback,
           "no FAST corner in the search radius matches: test every pixel in it");
   r->bind(s, "image_margin_px", &image_margin_px, 0, 100, "px",
@@ -54,6 +60,11 @@ void TrackerOptions::bind(OptionRegistry* r) {
   r->bind(s, "quality_lost", &quality_lost, 0.0, 1.0, "", "found / searched below this: lost");
   r->bind(s, "min_points_tracked", &min_points_tracked, 3, 100000, "points",
           "fewer points found: lost whatever the ratio");
+  r->bind(s, "max_pose_sigma_m", &max_pose_sigma_m, 0.0, 100.0, "m",
+          "lost when the pose's translation standard deviation (from the fit, worst "
+          "direction) exceeds this");
+  r->bind(s, "max_pose_sigma_deg", &max_pose_sigma_deg, 0.0, 180.0, "deg",
+          "lost when the pose's rotation standard deviation (worst axis) exceeds this");
   r->bind(s, "unreliable_after_searches", &unreliable_after_searches, 1, 1000000, "frames",
           "a point searched this often and rarely found no longer counts in the quality");
   r->bind(s, "unreliable_found_ratio", &unreliable_found_ratio, 0.0, 1.0, "",
@@ -68,6 +79,11 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "new keyframe when every keyframe is farther than this times the median depth...");
   r->bind(s, "keyframe_angle_deg", &keyframe_angle_deg, 0.0, 180.0, "deg",
           "...or rotated by more than this");
+  r->bind(s, "keyframe_few_points", &keyframe_few_points, 0, 100000, "points",
+          "fewer points found, and the mode makes points from depth: a keyframe is due "
+          "whatever the distance (0: off)");
+  r->bind(s, "keyframe_few_points_min_frames", &keyframe_few_points_min_frames, 0, 100000,
+          "frames", "...after at least this many frames since the last keyframe");
   r->bind(s, "keyframes_while_dodgy", &keyframes_while_dodgy,
           "also add keyframes while tracking is dodgy, when the mode creates points from depth");
   r->bind(s, "keyframe_min_depth_m", &keyframe_build.min_depth_m, 0.0, 100.0, "m",
@@ -78,6 +94,10 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "new points from depth per keyframe and pyramid level at most");
   r->bind(s, "depth_points_min_shi_tomasi", &depth_points.min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
           "weaker corners give no point");
+  r->bind(s, "depth_points_weak_min_shi_tomasi", &depth_points.weak_min_shi_tomasi, 0.0, 1e6,
+          "(grey/px)^2", "a keyframe with few points also takes corners down to this score...");
+  r->bind(s, "depth_points_weak_until_points", &depth_points.weak_until_points, 0, 100000,
+          "points", "...until it measures this many points (0: never)");
   r->bind(s, "depth_points_min_separation_px", &depth_points.min_separation_px, 0.0, 100.0, "px",
           "new points keep this distance from measured points and each other");
   r->bind(s, "depth_points_discontinuity", &depth_points.depth_discontinuity, 0.0, 1.0, "fraction",

@@ -83,6 +83,24 @@ struct EvalResult {
 Expected<EvalResult> evaluateTrajectory(const Trajectory& groundtruth, const Trajectory& estimate,
                                         const EvalOptions& options);
 
+// The paper's Table I: the error at the end of a run. Both trajectories are expressed
+// relative to their first associated pose (the SLAM map starts at the first posed frame),
+// and the last associated poses compared: E = (G_0^-1 G_n)^-1 (P_0^-1 P_n), with G ground
+// truth and P the estimate, 0 and n the first and last associated pose in time.
+struct EndPointError {
+  double position_m = 0.0;        // |translation of E| [m]
+  double distance_m = 0.0;        // ground truth travelled from pose 0 to pose n [m]
+  double position_percent = 0.0;  // 100 position_m / distance_m (0 when distance_m is 0)
+  double rotation_deg = 0.0;      // rotation angle of E [deg]
+  double first_t = 0.0, last_t = 0.0;  // estimate times of poses 0 and n [s]
+};
+// Errors: fewer than 2 associated poses (association as associateByTime).
+Expected<EndPointError> endPointError(const Trajectory& groundtruth, const Trajectory& estimate,
+                                      double max_dt_s);
+// "key value" lines: final_position_error_m, final_position_error_percent,
+// final_rotation_error_deg, final_distance_m (%.6f).
+std::string toKeyValueText(const EndPointError& error);
+
 // JSON object (one line per key) with ate_rmse_m, ate_mean_m, ate_median_m, ate_std_m,
 // ate_min_m, ate_max_m, scale, rpe_per_s_* / rpe_per_m_* (trans_rmse_m, rot_rmse_deg, pairs;
 // null when no pair spans the delta), num_estimate, num_groundtruth, num_associated,

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/image/patch.h"
 #include "rgbdslam/map/map.h"
 
 namespace rgbdslam {
@@ -14,6 +15,9 @@ namespace rgbdslam {
 struct RefindOptions {
   int search_radius_px = 5;   // around the predicted position [px of the search level]
   int max_zmssd = 400 * 64;   // accepted patch difference [grey^2 over 64 px]
+  // ...and below this times the template's zero-mean energy, which a textureless patch
+  // exceeds (as the tracker's PointSearchOptions::max_zmssd_flat_ratio; 0: off) [-]
+  double max_zmssd_flat_ratio = 0.0;
   double border_px = 8.0;     // predictions closer to the image edge are not searched [px]
 };
 
@@ -22,6 +26,10 @@ struct RefindOptions {
 std::optional<Measurement> findPointInKeyframe(const MapPoint& point, const Keyframe& source,
                                                const Keyframe& target, const PinholeCamera& camera,
                                                const RefindOptions& options);
+
+// The ZMSSD acceptance for 'patch': min(max_zmssd, flat_ratio * its zero-mean energy), or
+// max_zmssd when flat_ratio <= 0. A weak template is not accepted on a textureless patch.
+int flatCappedAcceptance(const Patch& patch, int max_zmssd, double flat_ratio);
 
 // The 2x2 affine map from small offsets around the point's pixel in 'source' to offsets in
 // 'target' [level-0 px / level-0 px], by projecting offset pixels at the point's depth.

@@ -26,6 +26,7 @@ struct EpipolarOptions {
   double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
   double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]
   int max_zmssd = 400 * 64;           // accepted patch difference [grey^2 over 64 px]
+  double max_zmssd_flat_ratio = 0.0;  // ...and below this times the template's energy (0: off)
   double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
   double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
   bool skip_corners_with_depth = true;  // only corners without a depth reading (depth modes)

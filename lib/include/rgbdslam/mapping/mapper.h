@@ -4,7 +4,8 @@
 //   are acknowledged again, gaps wait, keyframes of another map_id are refused): add the
 //   keyframe, its measurements of existing points and its provisional points from depth
 //   (measurements of unknown points are dropped and counted); for corners without depth
-//   (every corner in mono mode) add points by epipolar search against the nearest keyframe
+//   (every corner in mono mode) add points by epipolar search against a partner keyframe
+//   (the nearest, or a farther one for parallax: epipolar_partner_distance_ratio)
 //   (epipolar_search.h); run local bundle adjustment (the new keyframe and its nearest
 //   neighbours free, the other keyframes that see their points fixed, keyframe 0 always
 //   fixed). Returns the map delta (with the acknowledgement) to publish.
@@ -46,10 +47,17 @@ struct MapperOptions {
   // Bundle adjustment windows
   int local_ba_neighbours = 4;          // nearest keyframes optimised with the new one
   int global_ba_every = 1;              // run global BA after this many new keyframes
-  int max_global_ba_keyframes = 200;    // above this, global BA optimises only the newest ones
+  int max_global_ba_keyframes = 40;     // above this, global BA optimises only the newest ones
+                                        // (bounds its cost on long runs: the corridor makes a
+                                        // keyframe every ~0.15 m)
   // Epipolar search (points where there is no depth)
   double epipolar_min_depth_m = 0.3;    // search range along the epipolar line [m]
   double epipolar_max_depth_m = 8.0;    // [m]
+  // The partner keyframe: the farthest within this times the new keyframe's median depth
+  // whose optical axis is within the angle (nearest if none is farther): with a keyframe
+  // every few frames (forward motion, few points) the nearest gives no parallax [-, deg].
+  double epipolar_partner_distance_ratio = 0.25;
+  double epipolar_partner_max_angle_deg = 20.0;
   int epipolar_max_points = 300;        // corners without depth tried per new keyframe
   double epipolar_min_shi_tomasi = 30.0;  // weaker corners are not tried [(grey/px)^2]
   double epipolar_min_separation_px = 8.0;  // from points the keyframe measures, level 0 [px]
@@ -60,6 +68,9 @@ struct MapperOptions {
   double epipolar_max_reprojection_px = 2.0;  // triangulated point's error in either view [level px]
   // Patch matching (epipolar search and re-finding)
   int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
+  // ...and below this times the template's zero-mean energy: a weak template is not
+  // accepted on a textureless patch (tracker.max_zmssd_flat_ratio; 0: off) [-]
+  double max_zmssd_flat_ratio = 0.7;
   int refind_search_radius_px = 5;      // re-finding: search radius around the prediction [level px]
   // Culling
   int min_good_measurements = 2;        // points with fewer good measurements are culled (not source-only)

@@ -16,6 +16,11 @@ struct DepthPointOptions {
   int max_points_per_level = 300;     // strongest corners kept per level (by Shi-Tomasi score)
   double min_shi_tomasi = 30.0;       // weaker corners are not used: smallest eigenvalue of the mean structure tensor [(grey/px)^2]
   double min_separation_px = 8.0;     // from already-measured points and each other, level 0 [px]
+  // A view with few strong corners (weakly textured walls: a corridor) also takes weaker
+  // ones, down to weak_min_shi_tomasi, until the keyframe measures weak_until_points points
+  // (0: never); a richly textured view keeps only the strong ones, which localise better.
+  double weak_min_shi_tomasi = 10.0;  // [(grey/px)^2]
+  int weak_until_points = 100;        // [points]
   int patch_border_px = 6;            // corners this close to the level's border are skipped [px]
   double dense_depth_fraction = 0.5;  // at least this fraction of pixels with depth: a missing 3x3 neighbour rejects a corner
   double depth_discontinuity = 0.05;  // max spread of the 3x3 window's depths relative to the centre's (edges are skipped)

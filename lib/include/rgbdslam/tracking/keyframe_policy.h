@@ -3,6 +3,11 @@
 // adjustment) only when tracking is good, some frames have passed since the last one, and
 // the camera sees the scene from a place no keyframe covers: every keyframe is either
 // farther than a fraction of the scene depth or rotated by more than an angle.
+// With depth a keyframe also restores the supply of points: when the frame's found points
+// fall below few_points (the view moving into unmapped space, e.g. forward in a corridor
+// where points leave the image within metres), a keyframe is due after
+// few_points_min_frames whatever the distance, if the caller says new points can come
+// from depth ('points_from_depth'); otherwise nothing else would bring points in time.
 // Call order: after the pose of a frame is final; shouldAddKeyframe(...).
 // Frames and units: T_w_c camera to world [m]; angles in degrees.
 #include <vector>
@@ -16,6 +21,8 @@ struct KeyframePolicyOptions {
   int min_frames_between_keyframes = 10;  // frames since the last keyframe
   double distance_ratio = 0.1;            // distance / median scene depth to count as "far"
   double angle_deg = 15.0;                // rotation to count as "turned" [deg]
+  int few_points = 0;                     // fewer found points: keyframe due (0: off)
+  int few_points_min_frames = 3;          // ...after at least this many frames
 };
 
 struct KeyframePolicyInput {
@@ -23,9 +30,12 @@ struct KeyframePolicyInput {
   int frames_since_keyframe = 0;    // frames tracked since the last keyframe was added
   double median_depth_m = 0.0;      // median depth of the points found in this frame [m]
   SE3 T_w_c;                        // this frame's pose
+  int points_found = 0;             // map points found in this frame
+  bool points_from_depth = false;   // a keyframe now would get points from measured depth
 };
 
-// True if no keyframe is both within distance_ratio * median depth and within angle_deg.
+// True if no keyframe is both within distance_ratio * median depth and within angle_deg,
+// or if few points were found (see above).
 bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
                        const KeyframePolicyOptions& options);
 

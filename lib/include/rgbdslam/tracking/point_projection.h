@@ -90,6 +90,14 @@ struct PointSearchOptions {
   // patches that localise best. A flat image patch scores ZMSSD = E, so ratio < 1 still
   // rejects "no texture here". 0 disables (absolute threshold only).
   double max_zmssd_energy_ratio = 0.0;
+  // ...and in any case ZMSSD < max_zmssd_flat_ratio * E. Why: with template contrast s and
+  // image noise sigma (per pixel), E = n (s^2 + sigma^2), a correct match scores about
+  // 2 n sigma^2 and a textureless image patch n (s^2 + 2 sigma^2) >= E, whatever sigma is.
+  // Without this cap the absolute floor max_zmssd accepts a weak template (E below the
+  // floor) anywhere, e.g. on a plain corridor wall, and the pose stays at its prediction.
+  // A ratio of 0.7 keeps templates whose contrast is at least ~1.5 times the noise
+  // (2 sigma^2 / (s^2 + sigma^2) < 0.7). 0 disables (no cap).
+  double max_zmssd_flat_ratio = 0.0;
   // When no FAST corner within the radius is accepted, also test every pixel within the
   // radius (PTAM searches corners only; under motion blur and on fine texture the true
   // position often is no FAST corner at this frame's threshold).

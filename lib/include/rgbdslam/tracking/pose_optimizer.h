@@ -52,7 +52,19 @@ struct PoseOptimizerResult {
   int inliers_2d = 0;     // 2-D residuals with a non-zero final weight
   int inliers_depth = 0;  // depth residuals with a non-zero final weight
   int iterations = 0;     // iterations run
+  // J^T W J of the last iteration in normalised units (residuals divided by their sigmas),
+  // so its inverse is the pose covariance for the left perturbation xi = (v, w) [m, rad]
+  // when the measurement sigmas are right. Zero when not ok.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
+
+// Standard deviations of a pose from its information matrix: the largest over directions
+// of the translation part [m] and of the rotation part [rad]; infinite when singular.
+struct PoseUncertainty {
+  double translation_m = 0.0;
+  double rotation_rad = 0.0;
+};
+PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information);
 
 // Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / (a d^2)) over T_c_w.
 // inlier (optional) receives one flag per observation: its 2-D residual kept a weight.

@@ -5,9 +5,12 @@
 //   velocity, rotation pre-estimate from small blurry images), project the visible map
 //   points, warp their patches, search among FAST corners by ZMSSD, refine to sub-pixel,
 //   and update the pose by Gauss-Newton with Tukey weights (coarse stage: few points at high
-//   levels with a wide search; fine stage: many points). Tracking quality (fraction found)
-//   gives tracking / dodgy / lost; when lost, the relocaliser compares the small blurry image
-//   with every keyframe's and tries the best. Finally the keyframe decision; a new keyframe
+//   levels with a wide search, only when the image is predicted to move more than the fine
+//   search covers; fine stage: many points). Tracking quality (fraction found) gives
+//   tracking / dodgy / lost, and a frame whose found points do not fix the pose (its
+//   standard deviation from the fit) is lost too; when lost, the relocaliser compares the
+//   small blurry image with every keyframe's and tries the best. Finally the keyframe
+//   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
 //   applyMapUpdate(update): the mapper's newer map versions replace the replica's poses and
 //   points; older or foreign versions are ignored (the return value says why).
@@ -39,8 +42,18 @@ struct TrackerOptions {
   int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
   // ...or ZMSSD below this times the template's zero-mean energy (PointSearchOptions)
   double max_zmssd_energy_ratio = 0.5;
+  // ...and always below this times that energy: a weak template is not accepted on a
+  // textureless patch (PointSearchOptions::max_zmssd_flat_ratio; 0: off)
+  double max_zmssd_flat_ratio = 0.7;
   bool search_dense_fallback = true;    // test every pixel in the radius when no corner matches
   int coarse_min_points = 10;           // fewer coarse candidates: skip the coarse stage
+  // The coarse stage runs only when the predicted image motion, the median displacement of
+  // the visible points between the last pose and the start pose, is at least this [px at
+  // level 0]. Like PTAM's Tracker.CoarseMinVelocity, but measured in the image: forward
+  // motion (a corridor) moves the image little however fast the camera goes, and there a
+  // coarse stage on a few dozen matches at coarse levels only pulls a good prediction off
+  // (measured: 4-deg jumps that ended the corridor run).
+  double coarse_min_motion_px = 4.0;
   // A result below quality_good after a coarse stage is compared with the fine stage alone
   // from the prediction; the one with the higher quality is kept.
   bool retry_without_coarse = true;
@@ -57,19 +70,30 @@ struct TrackerOptions {
   // Quality
   double quality_good = 0.3;            // found / searched at least this: tracking
   double quality_lost = 0.13;           // below this: lost (between: dodgy)
-  int min_points_tracked = 20;          // fewer found points: lost whatever the ratio
+  int min_points_tracked = 10;          // fewer found points: lost whatever the ratio
+  // How well the found points fix the pose: lost when the pose's standard deviation, from
+  // the fit's J^T W J with the measurement sigmas (pose_optimizer.h), exceeds these in the
+  // worst direction. With depth residuals a few well-spread points fix all six degrees of
+  // freedom; points in a line or all far away do not, whatever their number.
+  double max_pose_sigma_m = 0.05;       // [m]
+  double max_pose_sigma_deg = 1.0;      // [deg]
   // A point searched at least this often and found in less than unreliable_found_ratio of
   // those frames is unreliable (fur, thin structures, wrong depth): still searched, but it
   // does not count in the quality, which should measure the view, not the map's bad points.
   int unreliable_after_searches = 10;   // [frames]
   double unreliable_found_ratio = 0.3;  // found / searched
   // Initialisation and relocalisation
-  int init_min_points = 50;             // keyframe 0 needs this many points from depth
+  int init_min_points = 20;             // keyframe 0 needs this many points from depth,
+                                        // and they must fix its pose (max_pose_sigma_*)
   int relocalise_candidates = 2;        // best keyframes (by small-blurry-image ZMSSD) tried
   // Keyframes
   int min_frames_between_keyframes = 10;      // frames since the last keyframe
   double keyframe_distance_ratio = 0.1;       // min distance to nearest keyframe / median scene depth
   double keyframe_angle_deg = 15.0;           // or this much rotation from the nearest keyframe [deg]
+  // With depth for new points, a frame that found fewer points than this gets a keyframe
+  // after keyframe_few_points_min_frames, wherever it is (keyframe_policy.h; 0: off).
+  int keyframe_few_points = 60;               // [points]
+  int keyframe_few_points_min_frames = 3;     // [frames]
   // PTAM adds keyframes only while tracking is good, because a monocular keyframe's points
   // need later views to be triangulated. A keyframe with depth brings its own points at once,
   // so while dodgy (the view drifting away from the mapped part) a keyframe is what restores
