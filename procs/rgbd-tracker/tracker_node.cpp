@@ -66,9 +66,9 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
   }
   if (backlog_.empty()) return;
-  std::vector<uint8_t> bytes = std::move(backlog_.front());
+  Received received = std::move(backlog_.front());
   backlog_.pop_front();
-  trackFrame(bytes);
+  trackFrame(received);
 }
 
 void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
@@ -78,12 +78,12 @@ void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /
     ++counters_.frames_skipped;
   }
   const auto* data = static_cast<const uint8_t*>(buffer->data);
-  backlog_.emplace_back(data, data + buffer->data_size);
+  backlog_.push_back(Received{std::vector<uint8_t>(data, data + buffer->data_size), buffer->recv_utime});
 }
 
-void TrackerNode::trackFrame(const std::vector<uint8_t>& bytes) {
+void TrackerNode::trackFrame(const Received& received) {
   const std::string channel = options_.frame_channel;
-  auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(bytes.data(), bytes.size());
+  auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(received.bytes.data(), received.bytes.size());
   auto frame = msg ? fromLcm(*msg) : Expected<RgbdFrame>(Error{msg.error()});
   if (!frame) {
     ++counters_.bad_frame_messages;
@@ -107,6 +107,7 @@ void TrackerNode::trackFrame(const std::vector<uint8_t>& bytes) {
   const rgbdslam::pose_t pose = toLcm(result.pose);
   local_->publish(options_.pose_channel, &pose);
   latency_ms_.add(result.pose.latency_ms);
+  arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
   if (result.new_keyframe) sendKeyframe(*result.new_keyframe);
 }
 
@@ -223,6 +224,7 @@ void TrackerNode::publishStatus() {
                        {"track_ms_p99", track_ms_.quantile(0.99)},
                        {"latency_ms_median", latency_ms_.quantile(0.5)},
                        {"latency_ms_p99", latency_ms_.quantile(0.99)},
+                       {"arrival_ms_median", arrival_ms_.quantile(0.5)},
                        {"keyframe_ack_ms_median", ack_ms_.quantile(0.5)},
                        {"keyframe_ack_ms_max", ack_ms_.quantile(1.0)},
                        {"keyframe_in_map_ms_median", in_map_ms_.quantile(0.5)},
@@ -243,6 +245,7 @@ void TrackerNode::printSummary() const {
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",
               static_cast<long long>(tracker_.mapVersion()), c.maps_received, c.maps_applied, c.maps_stale,
               c.maps_missing_delta, c.maps_foreign);
+  std::printf("arrival_ms_median %.3f\n", arrival_ms_.quantile(0.5));
   std::printf("track_ms_median %.3f\ntrack_ms_p99 %.3f\nlatency_ms_median %.3f\nlatency_ms_p99 %.3f\n",
               track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",

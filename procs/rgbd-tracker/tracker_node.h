@@ -61,7 +61,8 @@ class TrackerNode {
  private:
   using Clock = std::chrono::steady_clock;
   void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel);
-  void trackFrame(const std::vector<uint8_t>& bytes);
+  struct Received;
+  void trackFrame(const Received& received);
   void onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   void sendKeyframe(const KeyframeData& keyframe);
   void resendDue(Clock::time_point now);
@@ -82,10 +83,16 @@ class TrackerNode {
   };
   std::map<KeyframeId, Outgoing> unacked_;
   std::map<KeyframeId, Clock::time_point> created_;  // keyframes not yet in an applied map
-  std::deque<std::vector<uint8_t>> backlog_;  // frames received, not yet tracked, oldest first
+  struct Received {
+    std::vector<uint8_t> bytes;
+    int64_t recv_utime = 0;  // when LCM received it [us]
+  };
+  std::deque<Received> backlog_;  // frames received, not yet tracked, oldest first
   Clock::time_point last_frame_{}, last_status_{};
   TrackingState state_ = TrackingState::kInitialising;
-  RecentSamples track_ms_, latency_ms_, ack_ms_, in_map_ms_;
+  // latency = arrival (frame utime to its message's receipt: capture's encoding and LCM's
+  // transfer) + wait in the backlog + decoding + tracking + publishing the pose.
+  RecentSamples track_ms_, latency_ms_, arrival_ms_, ack_ms_, in_map_ms_;
 
   struct Counters {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
