@@ -103,11 +103,13 @@ void TrackerNode::trackFrame(const Received& received) {
   state_ = result.pose.state;
   result.pose.utime = frame->utime;
   result.pose.seq = frame->seq;
-  result.pose.latency_ms = (utimeNow() - frame->utime) * 1e-3;
+  const int64_t now_us = utimeNow();  // the pose's publication (within microseconds)
+  result.pose.latency_ms = (now_us - frame->utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose);
   local_->publish(options_.pose_channel, &pose);
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
+  frame_ms_.add((now_us - received.recv_utime) * 1e-3);
   if (result.new_keyframe) sendKeyframe(*result.new_keyframe);
 }
 
@@ -225,6 +227,8 @@ void TrackerNode::publishStatus() {
                        {"latency_ms_median", latency_ms_.quantile(0.5)},
                        {"latency_ms_p99", latency_ms_.quantile(0.99)},
                        {"arrival_ms_median", arrival_ms_.quantile(0.5)},
+                       {"frame_ms_median", frame_ms_.quantile(0.5)},
+                       {"frame_ms_p99", frame_ms_.quantile(0.99)},
                        {"keyframe_ack_ms_median", ack_ms_.quantile(0.5)},
                        {"keyframe_ack_ms_max", ack_ms_.quantile(1.0)},
                        {"keyframe_in_map_ms_median", in_map_ms_.quantile(0.5)},
@@ -245,7 +249,8 @@ void TrackerNode::printSummary() const {
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",
               static_cast<long long>(tracker_.mapVersion()), c.maps_received, c.maps_applied, c.maps_stale,
               c.maps_missing_delta, c.maps_foreign);
-  std::printf("arrival_ms_median %.3f\n", arrival_ms_.quantile(0.5));
+  std::printf("arrival_ms_median %.3f\nframe_ms_median %.3f\nframe_ms_p99 %.3f\n", arrival_ms_.quantile(0.5),
+              frame_ms_.quantile(0.5), frame_ms_.quantile(0.99));
   std::printf("track_ms_median %.3f\ntrack_ms_p99 %.3f\nlatency_ms_median %.3f\nlatency_ms_p99 %.3f\n",
               track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",

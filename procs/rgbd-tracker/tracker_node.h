@@ -90,9 +90,10 @@ class TrackerNode {
   std::deque<Received> backlog_;  // frames received, not yet tracked, oldest first
   Clock::time_point last_frame_{}, last_status_{};
   TrackingState state_ = TrackingState::kInitialising;
-  // latency = arrival (frame utime to its message's receipt: capture's encoding and LCM's
-  // transfer) + wait in the backlog + decoding + tracking + publishing the pose.
-  RecentSamples track_ms_, latency_ms_, arrival_ms_, ack_ms_, in_map_ms_;
+  // latency (frame utime to its pose's publication) = arrival (utime to the message's
+  // receipt: capture's encoding and LCM's transfer) + frame time (receipt to publication:
+  // the tracker's own time per frame: backlog, decoding, tracking, publishing).
+  RecentSamples track_ms_, latency_ms_, arrival_ms_, frame_ms_, ack_ms_, in_map_ms_;
 
   struct Counters {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
