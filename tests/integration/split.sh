@@ -55,10 +55,10 @@ split_finish() {
   "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
 }
 
-# split_report DIR NAME: one line of figures.
+# split_report DIR NAME [FRAMES]: one line of figures (FRAMES published, default 300).
 split_report() {
   local dir=$1 t=$1/tracker.out
-  echo "$2: poses $(tail -n +2 "$dir/trajectory.csv" | wc -l)/300," \
+  echo "$2: poses $(tail -n +2 "$dir/trajectory.csv" | wc -l)/${3:-300}," \
        "keyframes $(split_value keyframes_acked "$t")/$(split_value keyframes "$t") acknowledged" \
        "($(split_value keyframe_sends "$t") sends)," \
        "map version $(split_value map_version "$t") of $(split_value map_version_newest_seen "$t") seen," \

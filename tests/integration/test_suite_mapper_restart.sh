@@ -28,7 +28,7 @@ t_test=$SECONDS
 split_start "$WORK/clean" 0
 split_capture "$WORK/clean" "$seq"
 split_finish_frames "$WORK/clean" "$frames"
-split_report "$WORK/clean" clean
+split_report "$WORK/clean" clean "$frames"
 
 dir=$WORK/restart
 split_start "$dir" 0
@@ -44,7 +44,7 @@ date +%s%6N > "$dir/restart_utime"
 split_restart_mapper "$dir"
 wait "$capture" || fail "rgbd-capture failed"
 split_finish_frames "$dir" "$frames"
-split_report "$dir" "mapper SIGKILLed at 7 s, restarted 1 s later"
+split_report "$dir" "mapper SIGKILLed at 7 s, restarted 1 s later" "$frames"
 
 t=$dir/tracker.out
 split_mapper_summary "$dir" > "$dir/mapper.summary"

@@ -36,7 +36,7 @@ onboard_log "$WORK/clean"
 split_capture "$WORK/clean" "$seq"
 split_finish_frames "$WORK/clean" "$frames"
 kill -INT "$ONBOARD_LOG"; wait "$ONBOARD_LOG" || true
-split_report "$WORK/clean" clean
+split_report "$WORK/clean" clean "$frames"
 
 dir=$WORK/outage
 split_start "$dir" 0
@@ -54,7 +54,7 @@ split_capture "$dir" "$seq"
 wait "$outage" || fail "the outage timer failed"
 split_finish_frames "$dir" "$frames"
 kill -INT "$ONBOARD_LOG"; wait "$ONBOARD_LOG" || true
-split_report "$dir" "5 s outage"
+split_report "$dir" "5 s outage" "$frames"
 echo "(poses of $frames frames: clean $(tail -n +2 "$WORK/clean/trajectory.csv" | wc -l), with the outage $(tail -n +2 "$dir/trajectory.csv" | wc -l))"
 
 t0=$(cat "$dir/outage_start") t1=$(cat "$dir/outage_end")
