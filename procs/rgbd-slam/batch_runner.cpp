@@ -121,6 +121,9 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
       ++bad_frames_;
     }
     if (hasPose(last.status)) trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
+    if (const std::string event = loss_.update(last); !event.empty()) {
+      std::cerr << "\nrgbd-slam: " << event << "\n";
+    }
     showProgress(last, false);
   }
   slam_->finish();
@@ -135,6 +138,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   const SlamStats stats = slam_->stats();
   std::printf("frames %ld\nposes %zu\nkeyframes %ld\nmap_points %ld\nlost_frames %ld\nbad_frames %ld\n",
               stats.frames, trajectory.size(), stats.keyframes, stats.points, stats.lost_frames, bad_frames_);
+  std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
+  if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\n", percentile(track_ms_, 0.5), percentile(track_ms_, 0.95));
   if (!groundtruth_) {
     std::printf("ate_rmse_m unknown (no ground truth)\n");

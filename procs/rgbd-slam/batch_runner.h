@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/cli.h"
+#include "common/loss_report.h"
 #include "common/slam_config.h"
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/io/frame_source.h"
@@ -47,6 +48,7 @@ class BatchRunner {
   std::unique_ptr<SlamSystem> slam_;
   std::vector<double> track_ms_;
   long bad_frames_ = 0;
+  LossReport loss_;  // logged even with --quiet: losing tracking is an event, not progress
 };
 
 }  // namespace rgbdslam

@@ -103,6 +103,9 @@ void TrackerNode::trackFrame(const Received& received) {
   state_ = result.pose.state;
   result.pose.utime = frame->utime;
   result.pose.seq = frame->seq;
+  if (const std::string event = loss_.update(result); !event.empty()) {
+    std::cerr << "rgbd-tracker: " << event << "\n";
+  }
   const int64_t now_us = utimeNow();  // the pose's publication (within microseconds)
   result.pose.latency_ms = (now_us - frame->utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose);
@@ -213,6 +216,8 @@ void TrackerNode::publishStatus() {
                      {"frames_skipped", c.frames_skipped},
                      {"poses", c.poses},
                      {"lost_frames", c.lost},
+                     {"lost_episodes", loss_.episodes()},
+                     {"relocalisations", loss_.relocalisations()},
                      {"bad_frames", c.bad_frames},
                      {"bad_frame_messages", c.bad_frame_messages},
                      {"bad_map_messages", c.bad_map_messages},
@@ -241,6 +246,7 @@ void TrackerNode::printSummary() const {
   const Counters& c = counters_;
   // Key-value lines on stdout (for scripts), as rgbd-slam prints its summary.
   std::printf("frames_skipped %ld\n", c.frames_skipped);
+  std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",

@@ -25,6 +25,7 @@
 #include <string>
 
 #include "common/lcm_conversions.h"
+#include "common/loss_report.h"
 #include "common/samples.h"
 #include "rgbdslam/tracking/tracker.h"
 
@@ -102,6 +103,7 @@ class TrackerNode {
          maps_missing_delta = 0, maps_unknown_keyframe = 0, keyframe_bytes = 0;
   };
   Counters counters_;
+  LossReport loss_;  // logs losing tracking and relocalising, one line each
   int64_t newest_version_seen_ = 0;  // of this map, applied or not
 };
 

@@ -42,3 +42,14 @@ wait_for_file() {
   done
   fail "timed out after $2 s waiting for $1"
 }
+
+# run_rgbd_slam SPEC: rgbd-slam --deterministic on synth:SPEC, trajectory $WORK/t.txt,
+# summary $WORK/out, log $WORK/err; shows the summary's main lines and the loss/recovery
+# events. summary KEY prints one value of the summary.
+run_rgbd_slam() {
+  "$PROCS/rgbd-slam" --source "synth:$1" --output "$WORK/t.txt" --deterministic --quiet \
+      > "$WORK/out" 2> "$WORK/err" || fail "rgbd-slam failed: $(tail -5 "$WORK/err")"
+  grep -E "^(frames|poses|lost_frames|lost_episodes|relocalisations|ate_rmse_m) " "$WORK/out"
+  grep -E "^rgbd-slam: frame" "$WORK/err" || true
+}
+summary() { awk -v k="$1" '$1 == k { print $2 }' "$WORK/out"; }

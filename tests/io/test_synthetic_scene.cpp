@@ -131,6 +131,7 @@ TEST(SyntheticSpec, FormatRoundTrips) {
   EXPECT_EQ(formatSyntheticSpec(SyntheticOptions{}), "room");
   EXPECT_EQ(formatSyntheticSpec(parsed("room,drop=120-149")), "room,drop=120-149");
   EXPECT_EQ(formatSyntheticSpec(parsed("room,drop=7")), "room,drop=7-7");
+  EXPECT_EQ(formatSyntheticSpec(parsed("room,every=2,cover=5")), "room,every=2,cover=5-5");
 }
 
 TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
@@ -158,6 +159,10 @@ TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
       {"room,drop=-1", "drop"},
       {"room,drop=150-120", "drop"},
       {"room,drop=3-", "drop"},
+      {"room,every=0", "every"},
+      {"room,every=two", "every"},
+      {"room,cover=9-3", "cover"},
+      {"room,cover=x", "cover"},
   };
   for (const auto& [spec, named] : cases) {
     const auto result = parseSyntheticSpec(spec);
@@ -536,6 +541,46 @@ TEST(SyntheticScene, DroppedFramesLeaveAGapAndKeepTimestamps) {
   EXPECT_EQ(makeSyntheticSource(parsed("room,frames=10,drop=8-20"))->size(),
             std::optional<size_t>(8));
   EXPECT_EQ(makeSyntheticSource(parsed("room,frames=10,drop=0"))->next().frame.seq, 1);
+}
+
+// Every other frame (issue 3's fast motion): frames 0, 2, 4, ... with their own timestamps.
+TEST(SyntheticScene, EveryKeepsEveryKthFrame) {
+  const auto source = makeSyntheticSource(parsed("room,frames=9,every=2"));
+  EXPECT_EQ(source->size(), std::optional<size_t>(5));
+  const SyntheticScene plain(parsed("room,frames=9"));
+  std::vector<int64_t> seqs;
+  for (int i = 0; i < 20; ++i) {  // bounded: 5 frames then the end
+    const FrameResult result = source->next();
+    if (result.status == FrameResult::Status::kEnd) break;
+    ASSERT_EQ(result.status, FrameResult::Status::kFrame);
+    seqs.push_back(result.frame.seq);
+    EXPECT_EQ(result.frame.utime, plain.frameUtime(static_cast<size_t>(result.frame.seq)));
+  }
+  EXPECT_EQ(seqs, (std::vector<int64_t>{0, 2, 4, 6, 8}));
+  // With a gap as well: both leave frames out.
+  EXPECT_EQ(makeSyntheticSource(parsed("room,frames=9,every=2,drop=2-4"))->size(),
+            std::optional<size_t>(3));
+}
+
+// A covered camera (issue 3): the covered frames are delivered, dark, textureless and
+// without depth; the frames around are those of the plain scene.
+TEST(SyntheticScene, CoveredFramesAreDarkWithoutDepth) {
+  const SyntheticScene covered(parsed("room,frames=6,cover=2-3"));
+  const SyntheticScene plain(parsed("room,frames=6"));
+  EXPECT_EQ(makeSyntheticSource(covered.options())->size(), std::optional<size_t>(6));
+  for (size_t i = 0; i < 6; ++i) {
+    const RgbdFrame frame = covered.render(i);
+    if (i == 2 || i == 3) {
+      EXPECT_EQ(cv::countNonZero(frame.depth), 0) << "frame " << i;
+      cv::Scalar mean, stddev;
+      cv::meanStdDev(frame.colour, mean, stddev);
+      EXPECT_LT(mean[0], 12.0) << "frame " << i;
+      EXPECT_LT(stddev[0], 4.0) << "frame " << i;  // image noise only (sigma 2)
+    } else {
+      EXPECT_TRUE(identical(frame.colour, plain.render(i).colour)) << "frame " << i;
+      EXPECT_TRUE(identical(frame.depth, plain.render(i).depth)) << "frame " << i;
+    }
+  }
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <tuple>
 #include <opencv2/imgcodecs.hpp>
 
 #include "synthetic_world.h"
@@ -20,9 +22,10 @@ constexpr int64_t kEpochUs = 1700000000LL * 1000000LL;  // time of frame 0 [us]
 constexpr double kRoomDefaultSeconds = 20.0;             // 600 frames at 30 Hz
 constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz, 110 m
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
+constexpr int kCoveredGreyLevel = 8;                     // a covered lens' image [grey level]
 constexpr const char* kKnownKeys =
     "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
-    "noise_sigma, depth_sigma, quantise, drop";
+    "noise_sigma, depth_sigma, quantise, drop, every, cover";
 
 PinholeCamera syntheticCamera() {
   PinholeCamera camera;
@@ -84,13 +87,17 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
     } else {
       return badValue(key, value, "on, off or first");
     }
-  } else if (key == "drop") {  // FIRST-LAST or N
+  } else if (key == "drop" || key == "cover") {  // FIRST-LAST or N
     const size_t dash = value.find('-');
     const std::string first = value.substr(0, dash);
     const std::string last = dash == std::string::npos ? first : value.substr(dash + 1);
-    if (!parseInteger(first, &o->drop_first) || !parseInteger(last, &o->drop_last)) {
+    int* first_target = key == "drop" ? &o->drop_first : &o->cover_first;
+    int* last_target = key == "drop" ? &o->drop_last : &o->cover_last;
+    if (!parseInteger(first, first_target) || !parseInteger(last, last_target)) {
       return badValue(key, value, "FIRST-LAST frame indices or one index");
     }
+  } else if (key == "every") {
+    if (!parseInteger(value, &o->every)) return badValue(key, value, "an integer >= 1");
   } else if (key == "quantise") {
     if (value != "0" && value != "1") return badValue(key, value, "0 or 1");
     n.quantise = value == "1";
@@ -214,6 +221,10 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
   if (o.drop_first >= 0) {
     add("drop", std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last));
   }
+  if (o.every != d.every) add("every", std::to_string(o.every));
+  if (o.cover_first >= 0) {
+    add("cover", std::to_string(o.cover_first) + "-" + std::to_string(o.cover_last));
+  }
   return spec;
 }
 
@@ -225,11 +236,15 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
     return Error{"depth_fraction must be in (0, 1], got " + formatDouble(n.depth_fraction)};
   }
   if (n.depth_frames < -1) return Error{"depth_frames must be >= -1 (-1: all frames)"};
-  const bool no_drop = o.drop_first == -1 && o.drop_last == -1;
-  if (!no_drop && !(o.drop_first >= 0 && o.drop_last >= o.drop_first)) {
-    return Error{"drop must be FIRST-LAST with 0 <= FIRST <= LAST, got " +
-                 std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last)};
+  for (const auto& [name, first, last] : {std::make_tuple("drop", o.drop_first, o.drop_last),
+                                           std::make_tuple("cover", o.cover_first, o.cover_last)}) {
+    const bool unset = first == -1 && last == -1;
+    if (!unset && !(first >= 0 && last >= first)) {
+      return Error{std::string(name) + " must be FIRST-LAST with 0 <= FIRST <= LAST, got " +
+                   std::to_string(first) + "-" + std::to_string(last)};
+    }
   }
+  if (o.every < 1) return Error{"every must be >= 1, got " + std::to_string(o.every)};
   if (!(n.min_range_m > 0)) return Error{"min_range must be > 0 m"};
   if (!(n.max_range_m > n.min_range_m && n.max_range_m <= kMaxRangeLimitM)) {
     return Error{"max_range must be in (min_range, 13] m, got " + formatDouble(n.max_range_m)};
@@ -280,7 +295,15 @@ Trajectory SyntheticScene::groundTruth() const {
   return trajectory;
 }
 
-RgbdFrame SyntheticScene::render(size_t i) const { return renderPose(groundTruthPose(i), i); }
+RgbdFrame SyntheticScene::render(size_t i) const {
+  RgbdFrame frame = renderPose(groundTruthPose(i), i);
+  if (options_.covered(i)) {  // a hand over the lens: dark, noisy, no depth
+    frame.colour.setTo(cv::Scalar::all(kCoveredGreyLevel));
+    synthetic::addImageNoise(options_.noise, options_.seed, i, &frame.colour);
+    frame.depth.setTo(0);
+  }
+  return frame;
+}
 
 RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {
   synthetic::CleanFrame clean;

@@ -80,26 +80,41 @@ struct SyntheticOptions {
   // itself (render, groundTruth) is unaffected.
   int drop_first = -1;
   int drop_last = -1;
+  // Only every every-th frame reaches the FrameSource (frames 0, K, 2K, ...; every=2: every
+  // other frame, so the camera moves twice as far between frames). 1: all frames.
+  int every = 1;
+  // Frames cover_first..cover_last (inclusive) are delivered as with a hand over the lens:
+  // a dark, noisy image (grey level ~8 + image noise) and no depth reading at all. The
+  // trajectory goes on behind the hand. -1: nothing covered.
+  int cover_first = -1;
+  int cover_last = -1;
   KinectNoiseOptions noise;
 
   // True if the FrameSource leaves frame i out.
   bool dropped(size_t i) const {
-    return drop_first >= 0 && i >= static_cast<size_t>(drop_first) &&
-           i <= static_cast<size_t>(drop_last);
+    const bool in_gap = drop_first >= 0 && i >= static_cast<size_t>(drop_first) &&
+                        i <= static_cast<size_t>(drop_last);
+    return in_gap || (every > 1 && i % static_cast<size_t>(every) != 0);
+  }
+  // True if frame i is rendered covered.
+  bool covered(size_t i) const {
+    return cover_first >= 0 && i >= static_cast<size_t>(cover_first) &&
+           i <= static_cast<size_t>(cover_last);
   }
 };
 
 // "room" or "corridor" followed by optional ",key=value" pairs: seed, frames, rate,
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
 // (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
-// or one index N; see SyntheticOptions::drop_first). E.g. "room,seed=3,depth_fraction=0.3",
-// "room,frames=300,drop=120-149".
+// or one index N; see SyntheticOptions::drop_first), every (K >= 1), cover (FIRST-LAST or N,
+// like drop). E.g. "room,seed=3,depth_fraction=0.3", "room,frames=300,drop=120-149",
+// "room,every=2", "room,cover=120-149".
 // An unknown key or bad value is an Error naming it.
 Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
 // The spec string of 'options' (round-trips through parseSyntheticSpec), for logs.
 std::string formatSyntheticSpec(const SyntheticOptions& options);
 // Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1],
-// 0 <= drop_first <= drop_last or both -1, ...).
+// 0 <= drop_first <= drop_last or both -1, the same for cover, every >= 1, ...).
 Status validateSyntheticOptions(const SyntheticOptions& options);
 
 namespace synthetic {

@@ -1,0 +1,30 @@
+#include "common/loss_report.h"
+
+#include <cstdio>
+
+namespace rgbdslam {
+
+std::string LossReport::update(const TrackResult& result) {
+  using Status = TrackResult::Status;
+  const long seq = static_cast<long>(result.pose.seq);
+  char line[200] = "";
+  if (result.status == Status::kLost) {
+    if (lost_since_seq_ < 0) {
+      lost_since_seq_ = seq;
+      ++episodes_;
+      std::snprintf(line, sizeof(line), "frame %ld: tracking lost (%d points found, quality %.2f); relocalising",
+                    seq, result.pose.points_tracked, result.pose.quality);
+    }
+    ++lost_run_;
+  } else if (result.status == Status::kRelocalised) {
+    ++relocalisations_;
+    std::snprintf(line, sizeof(line), "frame %ld: relocalised after %ld lost frames (lost at frame %ld, %d points found)",
+                  seq, lost_run_, lost_since_seq_, result.pose.points_tracked);
+    lost_since_seq_ = -1, lost_run_ = 0;
+  } else if (result.status == Status::kTracked || result.status == Status::kInitialised) {
+    lost_since_seq_ = -1, lost_run_ = 0;
+  }
+  return line;
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,42 @@
+#include "common/loss_report.h"
+
+#include <gtest/gtest.h>
+
+namespace rgbdslam {
+namespace {
+
+TrackResult result(TrackResult::Status status, int64_t seq) {
+  TrackResult r;
+  r.status = status;
+  r.pose.seq = seq;
+  r.pose.points_tracked = status == TrackResult::Status::kLost ? 3 : 200;
+  return r;
+}
+
+// One line when tracking is lost, none while it stays lost, one when it comes back, and the
+// episode counts; bad frames in between change nothing.
+TEST(LossReport, OneLinePerTransition) {
+  using S = TrackResult::Status;
+  LossReport report;
+  EXPECT_EQ(report.update(result(S::kInitialised, 0)), "");
+  EXPECT_EQ(report.update(result(S::kTracked, 1)), "");
+  const std::string lost = report.update(result(S::kLost, 2));
+  EXPECT_NE(lost.find("frame 2: tracking lost (3 points found"), std::string::npos) << lost;
+  EXPECT_TRUE(report.lost());
+  EXPECT_EQ(report.lostSinceSeq(), 2);
+  EXPECT_EQ(report.update(result(S::kLost, 3)), "");
+  EXPECT_EQ(report.update(result(S::kBadFrame, 4)), "");
+  EXPECT_EQ(report.update(result(S::kLost, 5)), "");
+  const std::string back = report.update(result(S::kRelocalised, 6));
+  EXPECT_NE(back.find("frame 6: relocalised after 3 lost frames (lost at frame 2"), std::string::npos)
+      << back;
+  EXPECT_FALSE(report.lost());
+  EXPECT_EQ(report.update(result(S::kLost, 9)).empty(), false);
+  EXPECT_EQ(report.episodes(), 2);
+  EXPECT_EQ(report.relocalisations(), 1);
+  EXPECT_TRUE(report.lost());
+  EXPECT_EQ(report.lostSinceSeq(), 9);
+}
+
+}  // namespace
+}  // namespace rgbdslam
