@@ -25,7 +25,7 @@ constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per m
 constexpr int kCoveredGreyLevel = 8;                     // a covered lens' image [grey level]
 constexpr const char* kKnownKeys =
     "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
-    "noise_sigma, depth_sigma, quantise, drop, every, cover";
+    "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion";
 
 PinholeCamera syntheticCamera() {
   PinholeCamera camera;
@@ -33,6 +33,14 @@ PinholeCamera syntheticCamera() {
   camera.width = 640, camera.height = 480;
   camera.fx = 525.0, camera.fy = 525.0, camera.cx = 319.5, camera.cy = 239.5;
   camera.depth_factor = 5000.0;
+  return camera;
+}
+
+// The synthetic camera with the options' lens distortion.
+PinholeCamera distortedCamera(const SyntheticOptions& o) {
+  PinholeCamera camera = syntheticCamera();
+  camera.k1 = o.distortion[0], camera.k2 = o.distortion[1], camera.p1 = o.distortion[2];
+  camera.p2 = o.distortion[3], camera.k3 = o.distortion[4];
   return camera;
 }
 
@@ -96,6 +104,18 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
     if (!parseInteger(first, first_target) || !parseInteger(last, last_target)) {
       return badValue(key, value, "FIRST-LAST frame indices or one index");
     }
+  } else if (key == "distortion") {  // K1:K2:P1:P2[:K3]
+    std::array<double, 5> d{};
+    size_t count = 0, begin = 0;
+    for (; begin <= value.size() && count < d.size(); ++count) {
+      const size_t end = std::min(value.find(':', begin), value.size());
+      if (!parseDouble(value.substr(begin, end - begin), &d[count])) break;
+      begin = end + 1;
+    }
+    if ((count != 4 && count != 5) || begin <= value.size()) {
+      return badValue(key, value, "K1:K2:P1:P2 or K1:K2:P1:P2:K3");
+    }
+    o->distortion = d;
   } else if (key == "every") {
     if (!parseInteger(value, &o->every)) return badValue(key, value, "an integer >= 1");
   } else if (key == "quantise") {
@@ -222,6 +242,11 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
     add("drop", std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last));
   }
   if (o.every != d.every) add("every", std::to_string(o.every));
+  if (o.distortion != d.distortion) {
+    std::string list;
+    for (const double k : o.distortion) list += (list.empty() ? "" : ":") + formatDouble(k);
+    add("distortion", list);
+  }
   if (o.cover_first >= 0) {
     add("cover", std::to_string(o.cover_first) + "-" + std::to_string(o.cover_last));
   }
@@ -245,6 +270,12 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
     }
   }
   if (o.every < 1) return Error{"every must be >= 1, got " + std::to_string(o.every)};
+  for (const double k : o.distortion) {
+    if (!std::isfinite(k)) return Error{"distortion coefficients must be finite"};
+  }
+  if (Status lens = synthetic::checkLens(distortedCamera(o)); !lens) {
+    return Error{"distortion: " + lens.error()};
+  }
   if (!(n.min_range_m > 0)) return Error{"min_range must be > 0 m"};
   if (!(n.max_range_m > n.min_range_m && n.max_range_m <= kMaxRangeLimitM)) {
     return Error{"max_range must be in (min_range, 13] m, got " + formatDouble(n.max_range_m)};
@@ -262,7 +293,7 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
 }
 
 SyntheticScene::SyntheticScene(const SyntheticOptions& options)
-    : options_(options), camera_(syntheticCamera()) {
+    : options_(options), camera_(distortedCamera(options)) {
   assert(validateSyntheticOptions(options).ok());
   const bool room = options.scene == SyntheticSceneKind::kRoom;
   const double default_s = room ? kRoomDefaultSeconds : kCorridorDefaultSeconds;
@@ -274,6 +305,9 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options)
   world_ = std::make_shared<const synthetic::World>(
       room ? synthetic::buildRoom(options.seed, duration_s)
            : synthetic::buildCorridor(options.seed, duration_s));
+  if (camera_.hasDistortion()) {
+    lens_ = std::make_shared<const synthetic::LensResampling>(synthetic::makeLensResampling(camera_));
+  }
 }
 
 SyntheticScene::~SyntheticScene() = default;
@@ -307,7 +341,12 @@ RgbdFrame SyntheticScene::render(size_t i) const {
 
 RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {
   synthetic::CleanFrame clean;
-  synthetic::castRays(*world_, camera_, T_w_c, &clean);
+  if (lens_) {
+    synthetic::castRays(*world_, lens_->canvas, T_w_c, &clean);
+    synthetic::resampleThroughLens(*lens_, &clean);
+  } else {
+    synthetic::castRays(*world_, camera_, T_w_c, &clean);
+  }
   synthetic::addImageNoise(options_.noise, options_.seed, i, &clean.colour);
   RgbdFrame frame;
   frame.utime = frameUtime(i);

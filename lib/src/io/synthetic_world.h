@@ -15,6 +15,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
 #include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/util/expected.h"
 
 namespace rgbdslam::synthetic {
 
@@ -122,6 +123,23 @@ struct CleanFrame {
 };
 void castRays(const World& world, const PinholeCamera& camera, const SE3& T_w_c,
               CleanFrame* out);
+
+// ---- lens distortion (lib/src/io/synthetic_lens.cpp)
+// A distorted camera is rendered by ray-casting an ideal pinhole 'canvas' camera (same focal
+// lengths, large enough to hold everything the lens sees) and resampling: each pixel of the
+// distorted image takes the canvas pixel its ray passes through.
+struct LensResampling {
+  PinholeCamera canvas;  // no distortion
+  cv::Mat map_u, map_v;  // CV_32FC1, the distorted image's size: canvas coordinates [px]
+};
+// Error when the distortion cannot be inverted over the image (checked on a grid of pixels
+// and along the border) or would need a canvas over 4x the image on a side.
+Status checkLens(const PinholeCamera& distorted);
+// Needs checkLens(distorted) to pass.
+LensResampling makeLensResampling(const PinholeCamera& distorted);
+// Colour bilinear; depth and surface labels from the nearest canvas pixel (never blended
+// across an edge).
+void resampleThroughLens(const LensResampling& lens, CleanFrame* frame);
 
 // Image noise on 'colour' (in place) and the Kinect model from clean depth to raw depth.
 // Frame 'index' selects the random streams, so each frame's noise is fixed.

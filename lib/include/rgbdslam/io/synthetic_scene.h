@@ -20,6 +20,7 @@
 // Call order: parseSyntheticSpec() (or fill SyntheticOptions), construct SyntheticScene
 // (builds and bakes textures, ~0.1-0.5 s), then render(i) in any order; render() is const
 // and may be called from several threads.
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -88,6 +89,11 @@ struct SyntheticOptions {
   // trajectory goes on behind the hand. -1: nothing covered.
   int cover_first = -1;
   int cover_last = -1;
+  // Lens distortion of the rendered images, k1 k2 p1 p2 k3 (OpenCV order, as in the camera
+  // files): the camera() carries it and the frames are rendered through it, so the lens
+  // model is exercised end to end (e.g. the TUM fr1 Kinect's 0.2624 -0.9531 -0.0054 0.0026
+  // 1.1633). All zero: none.
+  std::array<double, 5> distortion{};
   KinectNoiseOptions noise;
 
   // True if the FrameSource leaves frame i out.
@@ -107,18 +113,21 @@ struct SyntheticOptions {
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
 // (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
 // or one index N; see SyntheticOptions::drop_first), every (K >= 1), cover (FIRST-LAST or N,
-// like drop). E.g. "room,seed=3,depth_fraction=0.3", "room,frames=300,drop=120-149",
-// "room,every=2", "room,cover=120-149".
+// like drop), distortion (K1:K2:P1:P2[:K3], colon-separated). E.g.
+// "room,seed=3,depth_fraction=0.3", "room,frames=300,drop=120-149", "room,every=2",
+// "room,cover=120-149", "room,distortion=0.2624:-0.9531:-0.0054:0.0026:1.1633".
 // An unknown key or bad value is an Error naming it.
 Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
 // The spec string of 'options' (round-trips through parseSyntheticSpec), for logs.
 std::string formatSyntheticSpec(const SyntheticOptions& options);
 // Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1],
-// 0 <= drop_first <= drop_last or both -1, the same for cover, every >= 1, ...).
+// 0 <= drop_first <= drop_last or both -1, the same for cover, every >= 1, a distortion
+// that is invertible over the image, ...).
 Status validateSyntheticOptions(const SyntheticOptions& options);
 
 namespace synthetic {
 struct World;  // boxes, baked textures and the trajectory (lib/src/io/synthetic_world.h)
+struct LensResampling;  // pinhole canvas -> distorted image (lib/src/io/synthetic_world.h)
 }
 
 class SyntheticScene {
@@ -130,8 +139,8 @@ class SyntheticScene {
   SyntheticScene& operator=(const SyntheticScene&) = default;
 
   const SyntheticOptions& options() const { return options_; }
-  // 640x480, fx = fy = 525, cx = 319.5, cy = 239.5, no distortion, depth_factor 5000,
-  // name "synthetic" (= config/cameras/synthetic.yaml).
+  // 640x480, fx = fy = 525, cx = 319.5, cy = 239.5, depth_factor 5000, name "synthetic"
+  // (= config/cameras/synthetic.yaml), with the options' distortion (none by default).
   const PinholeCamera& camera() const { return camera_; }
   size_t numFrames() const { return num_frames_; }
   // 1700000000 s + i / rate_hz, in microseconds.
@@ -155,6 +164,9 @@ class SyntheticScene {
   PinholeCamera camera_;
   size_t num_frames_ = 0;
   std::shared_ptr<const synthetic::World> world_;
+  // With distortion: frames are ray-cast through an ideal pinhole camera onto a canvas that
+  // covers the lens' field of view, then resampled into the distorted image.
+  std::shared_ptr<const synthetic::LensResampling> lens_;
 };
 
 // A FrameSource that renders the frames on the fly, in order, leaving out the dropped ones
