@@ -1,5 +1,6 @@
 #include "rgbd-slam/batch_runner.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -140,6 +141,9 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
               stats.frames, trajectory.size(), stats.keyframes, stats.points, stats.lost_frames, bad_frames_);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: peak resident set size [kB] on Linux
+  std::printf("peak_rss_mb %.1f\n", usage.ru_maxrss / 1024.0);
   std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\n", percentile(track_ms_, 0.5), percentile(track_ms_, 0.95));
   if (!groundtruth_) {
     std::printf("ate_rmse_m unknown (no ground truth)\n");
