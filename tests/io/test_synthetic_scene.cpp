@@ -134,6 +134,8 @@ TEST(SyntheticSpec, FormatRoundTrips) {
   EXPECT_EQ(formatSyntheticSpec(parsed("room,every=2,cover=5")), "room,every=2,cover=5-5");
   EXPECT_EQ(formatSyntheticSpec(parsed("room,distortion=0.25:-0.5:0.001:0")),
             "room,distortion=0.25:-0.5:0.001:0:0");
+  EXPECT_EQ(formatSyntheticSpec(parsed("room,size=320x240,intrinsics=262.5:262.5:159.5:119.5")),
+            "room,size=320x240,intrinsics=262.5:262.5:159.5:119.5");
 }
 
 TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
@@ -170,6 +172,11 @@ TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
       {"room,distortion=0:0:0:0:0:0", "distortion"},
       {"room,distortion=0.1:0:0:0:", "distortion"},
       {"room,distortion=-3:0:0:0", "distortion"},  // folds over: cannot be inverted
+      {"room,size=640", "size"},
+      {"room,size=10x10", "size"},
+      {"room,intrinsics=500:500:320", "intrinsics"},
+      {"room,intrinsics=0:500:320:240", "intrinsics"},
+      {"room,size=320x240,intrinsics=300:300:319.5:239.5", "principal point"},
   };
   for (const auto& [spec, named] : cases) {
     const auto result = parseSyntheticSpec(spec);
@@ -596,6 +603,22 @@ TEST(SyntheticScene, EveryKeepsEveryKthFrame) {
   // With a gap as well: both leave frames out.
   EXPECT_EQ(makeSyntheticSource(parsed("room,frames=9,every=2,drop=2-4"))->size(),
             std::optional<size_t>(3));
+}
+
+// Other cameras: the size and intrinsics reach the camera and the rendered frames.
+TEST(SyntheticScene, SizeAndIntrinsicsMakeAnotherCamera) {
+  const SyntheticScene scene(parsed("room,frames=2,size=320x240,intrinsics=300:290:150:125"));
+  const PinholeCamera& camera = scene.camera();
+  EXPECT_EQ(camera.width, 320);
+  EXPECT_EQ(camera.height, 240);
+  EXPECT_DOUBLE_EQ(camera.fx, 300.0);
+  EXPECT_DOUBLE_EQ(camera.fy, 290.0);
+  EXPECT_DOUBLE_EQ(camera.cx, 150.0);
+  EXPECT_DOUBLE_EQ(camera.cy, 125.0);
+  const RgbdFrame frame = scene.render(1);
+  EXPECT_EQ(frame.colour.size(), cv::Size(320, 240));
+  EXPECT_EQ(frame.depth.size(), cv::Size(320, 240));
+  EXPECT_GT(cv::countNonZero(frame.depth), 320 * 240 / 2);
 }
 
 // A covered camera (issue 3): the covered frames are delivered, dark, textureless and

@@ -22,10 +22,11 @@ constexpr int64_t kEpochUs = 1700000000LL * 1000000LL;  // time of frame 0 [us]
 constexpr double kRoomDefaultSeconds = 20.0;             // 600 frames at 30 Hz
 constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz, 110 m
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
+constexpr int kMinImageSidePx = 32, kMaxImageSidePx = 4096;  // limits of the size key [px]
 constexpr int kCoveredGreyLevel = 8;                     // a covered lens' image [grey level]
 constexpr const char* kKnownKeys =
     "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
-    "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion";
+    "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion, size, intrinsics";
 
 PinholeCamera syntheticCamera() {
   PinholeCamera camera;
@@ -36,9 +37,12 @@ PinholeCamera syntheticCamera() {
   return camera;
 }
 
-// The synthetic camera with the options' lens distortion.
+// The synthetic camera with the options' size, intrinsics and lens distortion.
 PinholeCamera distortedCamera(const SyntheticOptions& o) {
   PinholeCamera camera = syntheticCamera();
+  camera.width = o.width, camera.height = o.height;
+  camera.fx = o.intrinsics[0], camera.fy = o.intrinsics[1];
+  camera.cx = o.intrinsics[2], camera.cy = o.intrinsics[3];
   camera.k1 = o.distortion[0], camera.k2 = o.distortion[1], camera.p1 = o.distortion[2];
   camera.p2 = o.distortion[3], camera.k3 = o.distortion[4];
   return camera;
@@ -74,6 +78,19 @@ Status badValue(const std::string& key, const std::string& value, const char* ex
   return Error{"bad value '" + value + "' for key '" + key + "' (expected " + expected + ")"};
 }
 
+// Parses "A:B:C..." into out[0..max); returns the count, or 0 if anything is not a number
+// or there are more than max.
+size_t parseColonList(const std::string& value, double* out, size_t max) {
+  size_t count = 0, begin = 0;
+  while (begin <= value.size()) {
+    const size_t end = std::min(value.find(':', begin), value.size());
+    if (count == max || !parseDouble(value.substr(begin, end - begin), &out[count])) return 0;
+    ++count;
+    begin = end + 1;
+  }
+  return count;
+}
+
 // Applies one key=value of a spec; range checks are left to validateSyntheticOptions.
 Status applyKey(const std::string& key, const std::string& value, SyntheticOptions* o) {
   KinectNoiseOptions& n = o->noise;
@@ -106,16 +123,17 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
     }
   } else if (key == "distortion") {  // K1:K2:P1:P2[:K3]
     std::array<double, 5> d{};
-    size_t count = 0, begin = 0;
-    for (; begin <= value.size() && count < d.size(); ++count) {
-      const size_t end = std::min(value.find(':', begin), value.size());
-      if (!parseDouble(value.substr(begin, end - begin), &d[count])) break;
-      begin = end + 1;
-    }
-    if ((count != 4 && count != 5) || begin <= value.size()) {
-      return badValue(key, value, "K1:K2:P1:P2 or K1:K2:P1:P2:K3");
-    }
+    const size_t count = parseColonList(value, d.data(), d.size());
+    if (count != 4 && count != 5) return badValue(key, value, "K1:K2:P1:P2 or K1:K2:P1:P2:K3");
     o->distortion = d;
+  } else if (key == "intrinsics") {  // FX:FY:CX:CY
+    if (parseColonList(value, o->intrinsics.data(), 4) != 4) return badValue(key, value, "FX:FY:CX:CY");
+  } else if (key == "size") {  // WxH
+    const size_t x = value.find('x');
+    if (x == std::string::npos || !parseInteger(value.substr(0, x), &o->width) ||
+        !parseInteger(value.substr(x + 1), &o->height)) {
+      return badValue(key, value, "WIDTHxHEIGHT");
+    }
   } else if (key == "every") {
     if (!parseInteger(value, &o->every)) return badValue(key, value, "an integer >= 1");
   } else if (key == "quantise") {
@@ -242,11 +260,16 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
     add("drop", std::to_string(o.drop_first) + "-" + std::to_string(o.drop_last));
   }
   if (o.every != d.every) add("every", std::to_string(o.every));
-  if (o.distortion != d.distortion) {
+  auto colonList = [](const auto& values) {
     std::string list;
-    for (const double k : o.distortion) list += (list.empty() ? "" : ":") + formatDouble(k);
-    add("distortion", list);
+    for (const double k : values) list += (list.empty() ? "" : ":") + formatDouble(k);
+    return list;
+  };
+  if (o.distortion != d.distortion) add("distortion", colonList(o.distortion));
+  if (o.width != d.width || o.height != d.height) {
+    add("size", std::to_string(o.width) + "x" + std::to_string(o.height));
   }
+  if (o.intrinsics != d.intrinsics) add("intrinsics", colonList(o.intrinsics));
   if (o.cover_first >= 0) {
     add("cover", std::to_string(o.cover_first) + "-" + std::to_string(o.cover_last));
   }
@@ -272,6 +295,18 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
   if (o.every < 1) return Error{"every must be >= 1, got " + std::to_string(o.every)};
   for (const double k : o.distortion) {
     if (!std::isfinite(k)) return Error{"distortion coefficients must be finite"};
+  }
+  if (o.width < kMinImageSidePx || o.height < kMinImageSidePx || o.width > kMaxImageSidePx ||
+      o.height > kMaxImageSidePx) {
+    return Error{"size must be between 32x32 and 4096x4096, got " + std::to_string(o.width) + "x" +
+                 std::to_string(o.height)};
+  }
+  const auto& [fx, fy, cx, cy] = o.intrinsics;
+  if (!(fx > 0 && fy > 0 && std::isfinite(fx) && std::isfinite(fy))) {
+    return Error{"intrinsics: focal lengths must be > 0"};
+  }
+  if (!(cx >= 0 && cx <= o.width - 1 && cy >= 0 && cy <= o.height - 1)) {
+    return Error{"intrinsics: the principal point must lie in the image"};
   }
   if (Status lens = synthetic::checkLens(distortedCamera(o)); !lens) {
     return Error{"distortion: " + lens.error()};

@@ -94,6 +94,10 @@ struct SyntheticOptions {
   // model is exercised end to end (e.g. the TUM fr1 Kinect's 0.2624 -0.9531 -0.0054 0.0026
   // 1.1633). All zero: none.
   std::array<double, 5> distortion{};
+  // Other cameras: image size [px] and fx fy cx cy [px] of the rendered frames (default: the
+  // Kinect-like 640x480, 525 525 319.5 239.5 of config/cameras/synthetic.yaml).
+  int width = 640, height = 480;
+  std::array<double, 4> intrinsics{525.0, 525.0, 319.5, 239.5};
   KinectNoiseOptions noise;
 
   // True if the FrameSource leaves frame i out.
@@ -113,7 +117,8 @@ struct SyntheticOptions {
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
 // (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
 // or one index N; see SyntheticOptions::drop_first), every (K >= 1), cover (FIRST-LAST or N,
-// like drop), distortion (K1:K2:P1:P2[:K3], colon-separated). E.g.
+// like drop), distortion (K1:K2:P1:P2[:K3], colon-separated), size (WxH), intrinsics
+// (FX:FY:CX:CY). E.g.
 // "room,seed=3,depth_fraction=0.3", "room,frames=300,drop=120-149", "room,every=2",
 // "room,cover=120-149", "room,distortion=0.2624:-0.9531:-0.0054:0.0026:1.1633".
 // An unknown key or bad value is an Error naming it.
@@ -139,8 +144,9 @@ class SyntheticScene {
   SyntheticScene& operator=(const SyntheticScene&) = default;
 
   const SyntheticOptions& options() const { return options_; }
-  // 640x480, fx = fy = 525, cx = 319.5, cy = 239.5, depth_factor 5000, name "synthetic"
-  // (= config/cameras/synthetic.yaml), with the options' distortion (none by default).
+  // By default 640x480, fx = fy = 525, cx = 319.5, cy = 239.5, no distortion,
+  // depth_factor 5000, name "synthetic" (= config/cameras/synthetic.yaml); the options' size,
+  // intrinsics and distortion where given.
   const PinholeCamera& camera() const { return camera_; }
   size_t numFrames() const { return num_frames_; }
   // 1700000000 s + i / rate_hz, in microseconds.
