@@ -28,6 +28,8 @@ void MapperOptions::bind(OptionRegistry* r) {
   r->bind(m, "epipolar_partner_max_angle_deg", &epipolar_partner_max_angle_deg, 0.0, 180.0, "deg", "...whose optical axis is within this angle of the new keyframe's");
   r->bind(m, "epipolar_max_points", &epipolar_max_points, 0, 10000, "corners", "corners without depth tried per new keyframe");
   r->bind(m, "epipolar_min_shi_tomasi", &epipolar_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "weaker corners are not tried");
+  r->bind(m, "epipolar_weak_min_shi_tomasi", &epipolar_weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "a mono keyframe (no points from depth) with few points also tries corners down to this score...");
+  r->bind(m, "epipolar_weak_until_points", &epipolar_weak_until_points, 0, 100000, "points", "...until it measures this many points (0: never)");
   r->bind(m, "epipolar_min_separation_px", &epipolar_min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
   r->bind(m, "epipolar_line_tolerance_px", &epipolar_line_tolerance_px, 0.1, 20.0, "level px", "corner distance from the epipolar segment");
   r->bind(m, "epipolar_distinctiveness", &epipolar_distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
@@ -270,6 +272,10 @@ int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
   EpipolarOptions eo;
   eo.min_depth_m = options_.epipolar_min_depth_m, eo.max_depth_m = options_.epipolar_max_depth_m;
   eo.max_points = options_.epipolar_max_points, eo.min_shi_tomasi = options_.epipolar_min_shi_tomasi;
+  eo.weak_min_shi_tomasi = options_.epipolar_weak_min_shi_tomasi;
+  // Weak corners only where every point must come from epipolar search (mono): in the depth
+  // modes the keyframe's points from depth already took the weak corners that have depth.
+  eo.weak_until_points = depthPointsAllowed(mode_, kf.id) ? 0 : options_.epipolar_weak_until_points;
   eo.min_separation_px = options_.epipolar_min_separation_px;
   eo.line_tolerance_px = options_.epipolar_line_tolerance_px;
   eo.distinctiveness = options_.epipolar_distinctiveness;

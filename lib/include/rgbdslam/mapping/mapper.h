@@ -60,6 +60,11 @@ struct MapperOptions {
   double epipolar_partner_max_angle_deg = 20.0;
   int epipolar_max_points = 300;        // corners without depth tried per new keyframe
   double epipolar_min_shi_tomasi = 30.0;  // weaker corners are not tried [(grey/px)^2]
+  // ...except in a mono keyframe (no points from depth) measuring fewer than
+  // epipolar_weak_until_points points: then also corners down to epipolar_weak_min_shi_tomasi
+  // (EpipolarOptions; 0: never)
+  double epipolar_weak_min_shi_tomasi = 10.0;  // [(grey/px)^2]
+  int epipolar_weak_until_points = 100;        // [points]
   double epipolar_min_separation_px = 8.0;  // from points the keyframe measures, level 0 [px]
   double epipolar_line_tolerance_px = 1.5;  // corner distance from the epipolar segment [level px]
   double epipolar_distinctiveness = 0.8;    // best ZMSSD must be below this times the
