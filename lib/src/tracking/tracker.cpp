@@ -376,7 +376,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const KeyframePolicyOptions policy{
       options_.min_frames_between_keyframes, options_.keyframe_distance_ratio,
       options_.keyframe_angle_deg, options_.keyframe_few_points,
-      options_.keyframe_few_points_min_frames};
+      options_.keyframe_few_points_min_frames, options_.keyframe_few_points_mono,
+      options_.keyframe_few_points_mono_min_frames};
   if (shouldAddKeyframe(map_, input, policy)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }

@@ -85,6 +85,11 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "whatever the distance (0: off)");
   r->bind(s, "keyframe_few_points_min_frames", &keyframe_few_points_min_frames, 0, 100000,
           "frames", "...after at least this many frames since the last keyframe");
+  r->bind(s, "keyframe_few_points_mono", &keyframe_few_points_mono, 0, 100000, "points",
+          "mono (no points from depth): fewer points found gives a keyframe whatever the "
+          "distance (0: off)");
+  r->bind(s, "keyframe_few_points_mono_min_frames", &keyframe_few_points_mono_min_frames, 0,
+          100000, "frames", "...after at least this many frames since the last keyframe");
   r->bind(s, "keyframes_while_dodgy", &keyframes_while_dodgy,
           "also add keyframes while tracking is dodgy, when the mode creates points from depth");
   r->bind(s, "keyframe_min_depth_m", &keyframe_build.min_depth_m, 0.0, 100.0, "m",
