@@ -10,7 +10,7 @@
 # pose, |t_est_rel - t_gt_rel| over the ground-truth distance.
 # Measured 2026-11-22 (Release, 61 s for the whole test): depth-ba 450/450, ATE 5.7 mm,
 # final 0.065 %; depth-init 450/450, ATE 67 mm, final 1.51 %; mono (measured 2026-11-22,
-# 50 s) 450/450, ATE 52 mm, final 1.17 %. The bounds leave a margin for
+# 50 s) 450/450, ATE 51 mm, final 1.11 %. The bounds leave a margin for
 # other machines (floating point, not timing, is the only difference).
 source "$(dirname "$0")/common.sh"
 SPEC=corridor,frames=450
