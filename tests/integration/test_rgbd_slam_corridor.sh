@@ -3,18 +3,21 @@
 # 450 frames = 15 m with the hall in the middle): weakly textured walls, depth only to
 # 4.5 m, strong corners where there is no depth. Both depth modes must pose every frame;
 # depth-ba must end within 0.5 % of the distance travelled (the issue's Table I target)
-# and drift less than depth-init (Table I's order; mono does not get through the corridor
-# yet, docs/open_work.md). The final position error is computed here from synth-write's
+# and drift less than depth-init (Table I's order). Mono (depth of the first frame only)
+# must pose at least 95 % of the frames; its drift is not ordered against depth-init here
+# (measured lower on this synthetic corridor, docs/open_work.md). The final position error is computed here from synth-write's
 # ground truth as lib/eval endPointError does: both trajectories relative to their first
 # pose, |t_est_rel - t_gt_rel| over the ground-truth distance.
 # Measured 2026-11-22 (Release, 61 s for the whole test): depth-ba 450/450, ATE 5.7 mm,
-# final 0.065 %; depth-init 450/450, ATE 67 mm, final 1.51 %. The bounds leave a margin for
+# final 0.065 %; depth-init 450/450, ATE 67 mm, final 1.51 %; mono (measured 2026-11-22,
+# 50 s) 450/450, ATE 51 mm, final 1.11 %. The bounds leave a margin for
 # other machines (floating point, not timing, is the only difference).
 source "$(dirname "$0")/common.sh"
 SPEC=corridor,frames=450
 FRAMES=450
-declare -A ATE_BOUND_M=([depth-ba]=0.02 [depth-init]=0.2)
-declare -A FINAL_BOUND_PERCENT=([depth-ba]=0.5 [depth-init]=5)
+declare -A ATE_BOUND_M=([depth-ba]=0.02 [depth-init]=0.2 [mono]=0.25)
+declare -A FINAL_BOUND_PERCENT=([depth-ba]=0.5 [depth-init]=5 [mono]=5)
+declare -A MIN_POSES=([depth-ba]=$FRAMES [depth-init]=$FRAMES [mono]=$((FRAMES * 95 / 100)))
 declare -A FINAL
 
 "$PROCS/synth-write" "$SPEC" "$WORK/gt" > /dev/null 2> "$WORK/synth.err" \
@@ -60,7 +63,7 @@ final_error_percent() {
     }' "$WORK/gt/groundtruth.txt" "$1"
 }
 
-for mode in depth-ba depth-init; do
+for mode in depth-ba depth-init mono; do
   "$PROCS/rgbd-slam" --source "synth:$SPEC" --mode "$mode" --output "$WORK/$mode.txt" \
       --deterministic --quiet > "$WORK/$mode.out" 2> "$WORK/$mode.err" \
     || fail "rgbd-slam --mode $mode failed: $(tail -5 "$WORK/$mode.err")"
@@ -68,7 +71,8 @@ for mode in depth-ba depth-init; do
   ate=$(awk '/^ate_rmse_m /{print $2}' "$WORK/$mode.out")
   final=$(final_error_percent "$WORK/$mode.txt")
   echo "$mode: poses $poses/$FRAMES ate_rmse_m $ate final_position_error_percent $final"
-  [ "$poses" -eq "$FRAMES" ] || fail "$mode: only $poses of $FRAMES frames got a pose"
+  [ "$poses" -ge "${MIN_POSES[$mode]}" ] \
+    || fail "$mode: only $poses of $FRAMES frames got a pose (${MIN_POSES[$mode]} needed)"
   awk -v a="$ate" -v b="${ATE_BOUND_M[$mode]}" 'BEGIN { exit !(a <= b) }' \
     || fail "$mode: ATE $ate m exceeds ${ATE_BOUND_M[$mode]} m"
   awk -v f="$final" -v b="${FINAL_BOUND_PERCENT[$mode]}" 'BEGIN { exit !(f == f + 0 && f <= b) }' \

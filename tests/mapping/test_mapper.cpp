@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "rgbdslam/geometry/alignment.h"
@@ -206,6 +207,44 @@ TEST(Mapper, IntegratesInIdOrderOnly) {
   EXPECT_EQ(snap.version, mapper.version());
   EXPECT_EQ(snap.keyframes.size(), 3u);
   EXPECT_EQ(snap.points.size(), mapper.map().numPoints());
+}
+
+// In mono every point comes from epipolar search; a keyframe searches against a second
+// partner for the corners the first one could not triangulate (epipolar_partners_mono).
+TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {
+  const Sequence seq = makeSequence(SlamMode::kMono, 3, 10);
+  for (const int partners : {1, 2}) {
+    MapperOptions options;
+    options.epipolar_partners_mono = partners;
+    Mapper mapper(seq.camera, options, SlamMode::kMono);
+    int epipolar_points = 0;
+    for (const KeyframeData& kf : seq.keyframes) epipolar_points = mapper.addKeyframe(kf).epipolar_points;
+    std::set<KeyframeId> used;  // the other keyframe of each of keyframe 2's new points
+    for (const auto& [id, point] : mapper.map().points()) {
+      if (point.source_keyframe != 2) continue;
+      for (KeyframeId observer : mapper.map().observers(id)) {
+        if (observer != 2) used.insert(observer);
+      }
+    }
+    std::printf("mono, %d partner(s): keyframe 2 got %d epipolar points, from %zu keyframes\n",
+                partners, epipolar_points, used.size());
+    EXPECT_EQ(used.size(), static_cast<size_t>(partners));
+    EXPECT_GT(epipolar_points, 10);  // measured 21 and 27
+  }
+  // The depth modes keep one partner whatever the option says.
+  const Sequence with_depth = makeSequence(SlamMode::kDepthInit, 3, 10);
+  MapperOptions options;
+  options.epipolar_partners_mono = 3;
+  Mapper mapper(with_depth.camera, options, SlamMode::kDepthInit);
+  for (const KeyframeData& kf : with_depth.keyframes) mapper.addKeyframe(kf);
+  std::set<KeyframeId> used;
+  for (const auto& [id, point] : mapper.map().points()) {
+    if (point.source_keyframe != 2 || id % kPointsPerKeyframe < kPointsPerKeyframe / 2) continue;
+    for (KeyframeId observer : mapper.map().observers(id)) {
+      if (observer != 2) used.insert(observer);
+    }
+  }
+  EXPECT_LE(used.size(), 1u);
 }
 
 TEST(Mapper, DropsMeasurementsOfUnknownPoints) {

@@ -85,5 +85,26 @@ TEST_F(KeyframePolicyTest, FewPointsFoundWithDepthGiveAKeyframeWhereverTheCamera
   EXPECT_FALSE(decide(translated(0.0)));
 }
 
+TEST_F(KeyframePolicyTest, FewPointsFoundWithoutDepthHaveTheirOwnThresholdAndWait) {
+  options_.few_points = 60;
+  options_.few_points_min_frames = 3;
+  options_.few_points_no_depth = 40;
+  options_.few_points_no_depth_min_frames = 5;
+  input_.points_from_depth = false;  // mono: the mapper's epipolar search brings the points
+  input_.points_found = 39;
+  input_.frames_since_keyframe = 4;  // enough with depth, not without
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.frames_since_keyframe = 5;
+  EXPECT_TRUE(decide(translated(0.0)));
+  input_.points_found = 40;  // below the depth threshold, not below the mono one
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.points_found = 39;
+  input_.tracking_good = false;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.tracking_good = true;
+  options_.few_points_no_depth = 0;  // off
+  EXPECT_FALSE(decide(translated(0.0)));
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -114,6 +114,26 @@ TEST(Tracker, RejectsBadFramesAndInitialisesFromDepth) {
   EXPECT_EQ(tracker.map().numKeyframes(), 1u);
 }
 
+// Mono uses depth only to initialise: the frames after the first one are tracked from the
+// image alone, so removing their depth changes nothing; in depth-ba it changes the poses.
+TEST(Tracker, MonoTracksWithoutTheFramesDepth) {
+  for (const SlamMode mode : {SlamMode::kMono, SlamMode::kDepthBa}) {
+    Tracker with_depth(room().camera(), TrackerOptions{}, mode, 1);
+    Tracker without_depth(room().camera(), TrackerOptions{}, mode, 1);
+    double max_difference = 0.0;
+    for (size_t i = 0; i < 30; ++i) {
+      RgbdFrame bare = roomFrame(i);
+      if (i > 0) bare.depth = cv::Mat();
+      const TrackResult a = with_depth.track(roomFrame(i));
+      const TrackResult b = without_depth.track(bare);
+      ASSERT_TRUE(hasPose(a.status) && hasPose(b.status)) << slamModeName(mode) << " frame " << i;
+      max_difference = std::max(max_difference, (a.pose.T_w_c.inverse() * b.pose.T_w_c).log().norm());
+    }
+    if (mode == SlamMode::kMono) EXPECT_EQ(max_difference, 0.0);
+    else EXPECT_GT(max_difference, 1e-6) << "depth-ba should use the frames' depth";
+  }
+}
+
 TEST(Tracker, KeyframesGetIdsMeasurementsAndProvisionalPoints) {
   TrackerOptions options;
   options.min_frames_between_keyframes = 5;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdint>
 #include <cmath>
 #include <tuple>
 
@@ -22,8 +23,10 @@ struct Candidate {
   Eigen::Vector2d uv0;
 };
 
-// The new keyframe's maxima worth trying, strongest first (ties in level/row/column order).
-std::vector<Candidate> collectCandidates(const Keyframe& kf, const EpipolarOptions& options) {
+// The new keyframe's maxima with min_score <= Shi-Tomasi < max_score, strongest first (ties
+// in level/row/column order).
+std::vector<Candidate> collectCandidates(const Keyframe& kf, const EpipolarOptions& options,
+                                         double min_score, double max_score) {
   std::vector<Candidate> out;
   for (int level = 0; level < static_cast<int>(kf.corners.size()); ++level) {
     const cv::Mat& image = kf.pyramid.levels[level];
@@ -35,7 +38,7 @@ std::vector<Candidate> collectCandidates(const Keyframe& kf, const EpipolarOptio
       const Eigen::Vector2d uv0 = zeroFromLevel(Eigen::Vector2d(c.x, c.y), level);
       if (options.skip_corners_with_depth && kf.depthAt(uv0)) continue;
       const float score = shiTomasiScore(image, c);
-      if (score >= options.min_shi_tomasi) out.push_back({score, level, c, uv0});
+      if (score >= min_score && score < max_score) out.push_back({score, level, c, uv0});
     }
   }
   std::stable_sort(out.begin(), out.end(),
@@ -171,6 +174,56 @@ std::optional<Vec3> triangulateMidpoint(const Vec3& o_a, const Vec3& d_a, const 
   return Vec3(0.5 * (o_a + s * d_a + o_b + t * d_b));
 }
 
+namespace {
+
+// One pass over 'candidates' (at most options.max_points tried, and none once the keyframe
+// measures stop_at_points: taken.size()), appending to 'created'.
+void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const PinholeCamera& camera,
+                      const EpipolarOptions& options, const std::vector<Candidate>& candidates,
+                      size_t stop_at_points, PointId first_id, std::vector<Eigen::Vector2d>* taken,
+                      std::vector<EpipolarPoint>* created, EpipolarStats* st) {
+  const double sep2 = options.min_separation_px * options.min_separation_px;
+  const SE3 T_o_k = other.T_c_w() * keyframe.T_w_c;
+  int tried = 0;
+  for (const Candidate& cand : candidates) {
+    if (tried >= options.max_points || taken->size() >= stop_at_points) break;
+    if (!farFromAll(cand.uv0, *taken, sep2)) continue;
+    ++tried;
+    ++st->tried;
+    const int level = cand.level;
+    Patch patch;
+    if (!extractPatch(keyframe.pyramid.levels[level], cand.corner, &patch)) continue;
+    const Vec3 ray_k = camera.unproject(cand.uv0, 1.0);
+    const auto line = epipolarSegment(ray_k, T_o_k, level, camera, options);
+    if (line.size() < 2) { ++st->no_candidate; continue; }
+    const auto near = cornersNearLine(other.corners[level], line, options.line_tolerance_px);
+    if (near.empty()) { ++st->no_candidate; continue; }
+    cv::Point2i match;
+    const cv::Mat& other_image = other.pyramid.levels[level];
+    const MatchOutcome outcome = bestDistinctMatch(patch, other_image, near, options, &match);
+    if (outcome == MatchOutcome::kNoMatch) { ++st->no_match; continue; }
+    if (outcome == MatchOutcome::kAmbiguous) { ++st->ambiguous; continue; }
+    Eigen::Vector2d pos(match.x, match.y);
+    if (!refineSubpixel(patch, other_image, &pos)) { ++st->subpixel_failed; continue; }
+    const Eigen::Vector2d uv_o = zeroFromLevel(pos, level);
+    const auto p_w = triangulateChecked(keyframe, cand.uv0, other, uv_o, level, camera, options);
+    if (!p_w) { ++st->bad_triangulation; continue; }
+    EpipolarPoint ep;
+    ep.point.id = first_id + static_cast<PointId>(created->size());
+    ep.point.p_w = *p_w;
+    ep.point.source_keyframe = keyframe.id;
+    ep.point.source_level = level;
+    ep.point.source_uv = cand.uv0;
+    ep.in_keyframe = Measurement{ep.point.id, cand.uv0, level, 0.0};
+    ep.in_other = Measurement{ep.point.id, uv_o, level, 0.0};
+    created->push_back(ep);
+    taken->push_back(cand.uv0);
+    ++st->created;
+  }
+}
+
+}  // namespace
+
 std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyframe& other,
                                           const PinholeCamera& camera, const EpipolarOptions& options,
                                           PointId first_id, EpipolarStats* stats) {
@@ -179,41 +232,15 @@ std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyfra
   std::vector<EpipolarPoint> created;
   std::vector<Eigen::Vector2d> taken;
   for (const auto& [id, m] : keyframe.measurements) taken.push_back(m.uv);
-  const double sep2 = options.min_separation_px * options.min_separation_px;
-  const SE3 T_o_k = other.T_c_w() * keyframe.T_w_c;
-  for (const Candidate& cand : collectCandidates(keyframe, options)) {
-    if (st.tried >= options.max_points) break;
-    if (!farFromAll(cand.uv0, taken, sep2)) continue;
-    ++st.tried;
-    const int level = cand.level;
-    Patch patch;
-    if (!extractPatch(keyframe.pyramid.levels[level], cand.corner, &patch)) continue;
-    const Vec3 ray_k = camera.unproject(cand.uv0, 1.0);
-    const auto line = epipolarSegment(ray_k, T_o_k, level, camera, options);
-    if (line.size() < 2) { ++st.no_candidate; continue; }
-    const auto near = cornersNearLine(other.corners[level], line, options.line_tolerance_px);
-    if (near.empty()) { ++st.no_candidate; continue; }
-    cv::Point2i match;
-    const cv::Mat& other_image = other.pyramid.levels[level];
-    const MatchOutcome outcome = bestDistinctMatch(patch, other_image, near, options, &match);
-    if (outcome == MatchOutcome::kNoMatch) { ++st.no_match; continue; }
-    if (outcome == MatchOutcome::kAmbiguous) { ++st.ambiguous; continue; }
-    Eigen::Vector2d pos(match.x, match.y);
-    if (!refineSubpixel(patch, other_image, &pos)) { ++st.subpixel_failed; continue; }
-    const Eigen::Vector2d uv_o = zeroFromLevel(pos, level);
-    const auto p_w = triangulateChecked(keyframe, cand.uv0, other, uv_o, level, camera, options);
-    if (!p_w) { ++st.bad_triangulation; continue; }
-    EpipolarPoint ep;
-    ep.point.id = first_id + static_cast<PointId>(created.size());
-    ep.point.p_w = *p_w;
-    ep.point.source_keyframe = keyframe.id;
-    ep.point.source_level = level;
-    ep.point.source_uv = cand.uv0;
-    ep.in_keyframe = Measurement{ep.point.id, cand.uv0, level, 0.0};
-    ep.in_other = Measurement{ep.point.id, uv_o, level, 0.0};
-    created.push_back(ep);
-    taken.push_back(cand.uv0);
-    ++st.created;
+  searchCandidates(keyframe, other, camera, options,
+                   collectCandidates(keyframe, options, options.min_shi_tomasi, INFINITY), SIZE_MAX,
+                   first_id, &taken, &created, &st);
+  const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
+  if (taken.size() < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
+    searchCandidates(keyframe, other, camera, options,
+                     collectCandidates(keyframe, options, options.weak_min_shi_tomasi,
+                                       options.min_shi_tomasi),
+                     wanted, first_id, &taken, &created, &st);
   }
   return created;
 }

@@ -27,7 +27,10 @@ void MapperOptions::bind(OptionRegistry* r) {
   r->bind(m, "epipolar_partner_distance_ratio", &epipolar_partner_distance_ratio, 0.0, 10.0, "-", "epipolar partner: the farthest keyframe within this times the median depth (0: the nearest)");
   r->bind(m, "epipolar_partner_max_angle_deg", &epipolar_partner_max_angle_deg, 0.0, 180.0, "deg", "...whose optical axis is within this angle of the new keyframe's");
   r->bind(m, "epipolar_max_points", &epipolar_max_points, 0, 10000, "corners", "corners without depth tried per new keyframe");
+  r->bind(m, "epipolar_partners_mono", &epipolar_partners_mono, 1, 100, "keyframes", "mono keyframes search against this many partners (the chosen one, then the nearest others within the angle)");
   r->bind(m, "epipolar_min_shi_tomasi", &epipolar_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "weaker corners are not tried");
+  r->bind(m, "epipolar_weak_min_shi_tomasi", &epipolar_weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "a mono keyframe (no points from depth) with few points also tries corners down to this score...");
+  r->bind(m, "epipolar_weak_until_points", &epipolar_weak_until_points, 0, 100000, "points", "...until it measures this many points (0: never)");
   r->bind(m, "epipolar_min_separation_px", &epipolar_min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
   r->bind(m, "epipolar_line_tolerance_px", &epipolar_line_tolerance_px, 0.1, 20.0, "level px", "corner distance from the epipolar segment");
   r->bind(m, "epipolar_distinctiveness", &epipolar_distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
@@ -119,7 +122,9 @@ class Mapper::Impl {
   void addPoint(const MapPoint& point);
   void addMeasurement(KeyframeId kf, Measurement m);
   KeyframeId epipolarPartner(const Keyframe& kf) const;
+  std::vector<KeyframeId> epipolarPartners(const Keyframe& kf) const;
   int addEpipolarPoints(const Keyframe& kf);
+  int addEpipolarPointsWith(const Keyframe& kf, const Keyframe& other, int created_before);
   BaResult runBa(const std::set<KeyframeId>& free_keyframes, const std::atomic<bool>* interrupt);
   std::set<KeyframeId> localWindow(const Keyframe& kf) const;
   std::set<KeyframeId> globalWindow() const;
@@ -264,12 +269,45 @@ KeyframeId Mapper::Impl::epipolarPartner(const Keyframe& kf) const {
   return best;
 }
 
+// The partner above; in mono (every point from epipolar search) also the other keyframes
+// within epipolar_partner_max_angle_deg, nearest first, up to epipolar_partners_mono.
+std::vector<KeyframeId> Mapper::Impl::epipolarPartners(const Keyframe& kf) const {
+  std::vector<KeyframeId> partners;
+  const KeyframeId first = epipolarPartner(kf);
+  if (first < 0) return partners;
+  partners.push_back(first);
+  if (depthPointsAllowed(mode_, kf.id)) return partners;
+  const double min_cos = std::cos(options_.epipolar_partner_max_angle_deg * M_PI / 180.0);
+  const Vec3 axis = kf.T_w_c.rotationMatrix().col(2);
+  const size_t wanted = static_cast<size_t>(options_.epipolar_partners_mono);
+  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, map_.numKeyframes())) {
+    if (partners.size() >= wanted) break;
+    if (id == kf.id || id == first) continue;
+    if (axis.dot(map_.keyframe(id)->T_w_c.rotationMatrix().col(2)) < min_cos) continue;
+    partners.push_back(id);
+  }
+  return partners;
+}
+
 int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
-  const KeyframeId other_id = epipolarPartner(kf);
-  if (other_id < 0 || options_.epipolar_max_points <= 0) return 0;
+  if (options_.epipolar_max_points <= 0) return 0;
+  int created = 0;
+  for (KeyframeId other_id : epipolarPartners(kf)) {
+    created += addEpipolarPointsWith(kf, *map_.keyframe(other_id), created);
+  }
+  return created;
+}
+
+// Points of 'kf' triangulated against 'other'; ids continue after 'created_before'.
+int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& other,
+                                        int created_before) {
   EpipolarOptions eo;
   eo.min_depth_m = options_.epipolar_min_depth_m, eo.max_depth_m = options_.epipolar_max_depth_m;
   eo.max_points = options_.epipolar_max_points, eo.min_shi_tomasi = options_.epipolar_min_shi_tomasi;
+  eo.weak_min_shi_tomasi = options_.epipolar_weak_min_shi_tomasi;
+  // Weak corners only where every point must come from epipolar search (mono): in the depth
+  // modes the keyframe's points from depth already took the weak corners that have depth.
+  eo.weak_until_points = depthPointsAllowed(mode_, kf.id) ? 0 : options_.epipolar_weak_until_points;
   eo.min_separation_px = options_.epipolar_min_separation_px;
   eo.line_tolerance_px = options_.epipolar_line_tolerance_px;
   eo.distinctiveness = options_.epipolar_distinctiveness;
@@ -278,8 +316,7 @@ int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
   eo.min_parallax_deg = options_.epipolar_min_parallax_deg;
   eo.max_reprojection_px = options_.epipolar_max_reprojection_px;
   eo.skip_corners_with_depth = depthPointsAllowed(mode_, kf.id);
-  const PointId first_id = kf.id * kPointsPerKeyframe + kPointsPerKeyframe / 2;
-  const Keyframe& other = *map_.keyframe(other_id);
+  const PointId first_id = kf.id * kPointsPerKeyframe + kPointsPerKeyframe / 2 + created_before;
   const auto created = epipolarSearch(kf, other, camera_, eo, first_id);
   for (const EpipolarPoint& ep : created) {
     addPoint(ep.point);

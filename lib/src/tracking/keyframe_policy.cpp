@@ -15,8 +15,10 @@ double rotationAngleDeg(const SE3& a, const SE3& b) {
 bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
                        const KeyframePolicyOptions& options) {
   if (!input.tracking_good) return false;
-  if (input.points_from_depth && input.points_found < options.few_points &&
-      input.frames_since_keyframe >= options.few_points_min_frames) {
+  const int few_points = input.points_from_depth ? options.few_points : options.few_points_no_depth;
+  const int few_points_min_frames = input.points_from_depth ? options.few_points_min_frames
+                                                            : options.few_points_no_depth_min_frames;
+  if (input.points_found < few_points && input.frames_since_keyframe >= few_points_min_frames) {
     return true;
   }
   if (input.frames_since_keyframe < options.min_frames_between_keyframes) return false;

@@ -117,6 +117,7 @@ class Tracker::Impl {
   void addSlot(MapPoint* point);
   void removeSlot(PointId id);
   PoseOptimizerOptions poseOptions() const;
+  bool depthInPose() const { return options_.use_depth_in_pose && depthInTracking(mode_); }
 
   PinholeCamera camera_;
   TrackerOptions options_;
@@ -375,7 +376,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const KeyframePolicyOptions policy{
       options_.min_frames_between_keyframes, options_.keyframe_distance_ratio,
       options_.keyframe_angle_deg, options_.keyframe_few_points,
-      options_.keyframe_few_points_min_frames};
+      options_.keyframe_few_points_min_frames, options_.keyframe_few_points_mono,
+      options_.keyframe_few_points_mono_min_frames};
   if (shouldAddKeyframe(map_, input, policy)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
@@ -476,7 +478,7 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
   std::vector<PointSlot*> found;
   for (PointSlot* slot : slots) {
     if (!slot->found) continue;
-    const double depth = options_.use_depth_in_pose ? depthAt(frame, slot->found_uv) : 0.0;
+    const double depth = depthInPose() ? depthAt(frame, slot->found_uv) : 0.0;
     observations_.push_back({slot->point->p_w, slot->found_uv, slot->found_level, depth});
     found.push_back(slot);
   }
@@ -507,7 +509,7 @@ PoseOptimizerOptions Tracker::Impl::poseOptions() const {
   pose.min_robust_sigma = options_.min_robust_sigma;
   pose.max_robust_sigma = options_.max_robust_sigma;
   pose.free_scale_iterations = options_.free_scale_iterations;
-  pose.use_depth = options_.use_depth_in_pose;
+  pose.use_depth = depthInPose();
   pose.depth_sigma_coefficient = options_.depth_sigma_coefficient;
   return pose;
 }

@@ -52,7 +52,8 @@ void TrackerOptions::bind(OptionRegistry* r) {
   r->bind(s, "free_scale_iterations", &free_scale_iterations, 0, 100, "iterations",
           "pose iterations per stage with the median scale uncapped, before the cap applies");
   r->bind(s, "use_depth_in_pose", &use_depth_in_pose,
-          "add depth residuals of tracked corners with a depth reading to the pose");
+          "add depth residuals of tracked corners with a depth reading to the pose (never in "
+          "mono, where depth serves only the first frame)");
   r->bind(s, "depth_sigma_coefficient", &depth_sigma_coefficient, 1e-5, 1.0, "1/m",
           "a in sigma_d = a d^2 for the depth residuals");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
@@ -84,6 +85,11 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "whatever the distance (0: off)");
   r->bind(s, "keyframe_few_points_min_frames", &keyframe_few_points_min_frames, 0, 100000,
           "frames", "...after at least this many frames since the last keyframe");
+  r->bind(s, "keyframe_few_points_mono", &keyframe_few_points_mono, 0, 100000, "points",
+          "mono (no points from depth): fewer points found gives a keyframe whatever the "
+          "distance (0: off)");
+  r->bind(s, "keyframe_few_points_mono_min_frames", &keyframe_few_points_mono_min_frames, 0,
+          100000, "frames", "...after at least this many frames since the last keyframe");
   r->bind(s, "keyframes_while_dodgy", &keyframes_while_dodgy,
           "also add keyframes while tracking is dodgy, when the mode creates points from depth");
   r->bind(s, "keyframe_min_depth_m", &keyframe_build.min_depth_m, 0.0, 100.0, "m",

@@ -22,6 +22,13 @@ struct EpipolarOptions {
   double max_depth_m = 8.0;           // [m]
   int max_points = 300;               // corners tried (strongest Shi-Tomasi first)
   double min_shi_tomasi = 30.0;       // weaker corners are not tried [(grey/px)^2]
+  // A keyframe that measures fewer than weak_until_points points (a weakly textured view:
+  // corridor walls, where the strong corners are far away and too close to the epipole to
+  // triangulate in forward motion) also tries weaker corners, down to weak_min_shi_tomasi,
+  // after the strong ones and with a budget of max_points of their own, until it measures
+  // weak_until_points (0: never).
+  double weak_min_shi_tomasi = 10.0;  // [(grey/px)^2]
+  int weak_until_points = 0;          // [points]
   double min_separation_px = 8.0;     // from measured points and each other, level 0 [px]
   double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
   double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]

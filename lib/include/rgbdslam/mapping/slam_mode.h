@@ -35,4 +35,9 @@ inline bool depthPointsAllowed(SlamMode mode, int64_t keyframe_id) {
   return mode != SlamMode::kMono || keyframe_id == 0;
 }
 
+// Whether the tracker may use the depth readings of the frames it tracks (depth residuals
+// in the pose): not in mono, where depth serves only the map initialisation (the paper's
+// "monocular visual SLAM": only the first RGB-D frame's depth, to fix the scale).
+inline bool depthInTracking(SlamMode mode) { return mode != SlamMode::kMono; }
+
 }  // namespace rgbdslam

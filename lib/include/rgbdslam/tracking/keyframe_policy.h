@@ -7,7 +7,10 @@
 // fall below few_points (the view moving into unmapped space, e.g. forward in a corridor
 // where points leave the image within metres), a keyframe is due after
 // few_points_min_frames whatever the distance, if the caller says new points can come
-// from depth ('points_from_depth'); otherwise nothing else would bring points in time.
+// from depth ('points_from_depth').
+// Without depth (mono) a keyframe brings points only through the mapper's epipolar search
+// against an earlier keyframe, so the same rule has its own threshold and wait
+// (few_points_no_depth, few_points_no_depth_min_frames).
 // Call order: after the pose of a frame is final; shouldAddKeyframe(...).
 // Frames and units: T_w_c camera to world [m]; angles in degrees.
 #include <vector>
@@ -23,6 +26,8 @@ struct KeyframePolicyOptions {
   double angle_deg = 15.0;                // rotation to count as "turned" [deg]
   int few_points = 0;                     // fewer found points: keyframe due (0: off)
   int few_points_min_frames = 3;          // ...after at least this many frames
+  int few_points_no_depth = 0;            // the same when no points come from depth (0: off)
+  int few_points_no_depth_min_frames = 3;  // ...after at least this many frames
 };
 
 struct KeyframePolicyInput {

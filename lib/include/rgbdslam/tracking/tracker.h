@@ -94,6 +94,15 @@ struct TrackerOptions {
   // after keyframe_few_points_min_frames, wherever it is (keyframe_policy.h; 0: off).
   int keyframe_few_points = 60;               // [points]
   int keyframe_few_points_min_frames = 3;     // [frames]
+  // The same in mono, where a keyframe gets its points only from the mapper's epipolar
+  // search against an earlier keyframe (0: off). Measured on the synthetic corridor (900
+  // frames, final position error) with one epipolar partner: 80 points with a wait of 2, 3
+  // or 4 frames 0.16, 0.05, 0.12 %; 100 and 3: 0.11 %; 60 and 2-4: 0.4-0.8 %, but 60 and 5
+  // or 40 and 3 let the points run short and the scale collapsed (50-70 %), 60 and 8 lost
+  // tracking. With two partners (mapper.epipolar_partners_mono) 60 and 5: 0.18 %, 40 and
+  // 3: 0.09 %.
+  int keyframe_few_points_mono = 80;          // [points]
+  int keyframe_few_points_mono_min_frames = 3;  // [frames]
   // PTAM adds keyframes only while tracking is good, because a monocular keyframe's points
   // need later views to be triangulated. A keyframe with depth brings its own points at once,
   // so while dodgy (the view drifting away from the mapped part) a keyframe is what restores
