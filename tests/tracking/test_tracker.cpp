@@ -82,6 +82,25 @@ TEST(Tracker, TracksSyntheticRoomWithoutMapper) {
   EXPECT_GT(keyframes, 2);
 }
 
+// A coarse stage that pulled the pose off shows as a poor quality, or as a sudden drop from
+// the last frame's quality while what is left still counts as good.
+TEST(Tracker, RetriesWithoutCoarseStageOnPoorOrDroppedQuality) {
+  TrackerOptions options;
+  options.quality_good = 0.3;
+  options.retry_quality_ratio = 0.6;
+  EXPECT_TRUE(coarseRetryWanted(options, 0.25, 0.0));   // poor
+  EXPECT_FALSE(coarseRetryWanted(options, 0.5, 0.0));  // good, no last frame
+  EXPECT_FALSE(coarseRetryWanted(options, 0.5, 0.8));   // 0.5 >= 0.6 * 0.8
+  EXPECT_TRUE(coarseRetryWanted(options, 0.38, 0.81));  // the corridor's end wall: 0.81 -> 0.38
+  options.retry_quality_ratio = 0.0;                    // off: only the poor frames
+  EXPECT_FALSE(coarseRetryWanted(options, 0.38, 0.81));
+  EXPECT_TRUE(coarseRetryWanted(options, 0.25, 0.81));
+  options.retry_without_coarse = false;                 // never
+  options.retry_quality_ratio = 0.6;
+  EXPECT_FALSE(coarseRetryWanted(options, 0.25, 0.81));
+  EXPECT_FALSE(coarseRetryWanted(options, 0.38, 0.81));
+}
+
 TEST(Tracker, RejectsBadFramesAndInitialisesFromDepth) {
   Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
   RgbdFrame empty;

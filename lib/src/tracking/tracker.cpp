@@ -52,6 +52,11 @@ double median(std::vector<double>* values) {
 
 }  // namespace
 
+bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality) {
+  return options.retry_without_coarse &&
+         (quality < options.quality_good || quality < options.retry_quality_ratio * last_quality);
+}
+
 class Tracker::Impl {
  public:
   Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
@@ -84,6 +89,7 @@ class Tracker::Impl {
     velocity_.setZero();
     frames_since_keyframe_ = 0;
     next_keyframe_id_ = 0;
+    last_quality_ = 0.0;
     have_previous_sbi_ = false;
   }
 
@@ -138,6 +144,7 @@ class Tracker::Impl {
   Vec6 velocity_ = Vec6::Zero();  // log of the last inter-frame motion (left, on T_c_w)
   int frames_since_keyframe_ = 0;
   KeyframeId next_keyframe_id_ = 0;
+  double last_quality_ = 0.0;  // of the last accepted frame (0 after loss and reset)
 
   // Per-frame buffers, reused.
   cv::Mat grey_;
@@ -266,9 +273,9 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // gives many wrong ones; now and then they pull the pose off, and the fine stage, which
   // searches near that pose, cannot bring it back. A poor result after a coarse stage is
   // therefore compared with the fine stage alone from the prediction, and the attempt that
-  // explains more of its searched points is kept.
-  if (attempt.did_coarse && options_.retry_without_coarse &&
-      attempt.quality < options_.quality_good) {
+  // explains more of its searched points is kept. So is one whose quality dropped sharply
+  // from the last frame's (TrackerOptions::retry_quality_ratio).
+  if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
     saveOutcome(&outcome_);
     const Attempt retry = trackFrom(predicted, frame, /*allow_coarse=*/false);
     if (retry.quality > attempt.quality) attempt = retry;
@@ -277,6 +284,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   if (isLost(attempt)) {
     state_ = TrackingState::kLost;
     velocity_.setZero();
+    last_quality_ = 0.0;
     TrackResult result;
     result.status = TrackStatus::kLost;
     result.pose.state = TrackingState::kLost;
@@ -353,6 +361,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
                                   TrackingState state) {
   if (state != TrackingState::kRelocalised) velocity_ = (attempt.T_c_w * T_c_w_.inverse()).log();
   T_c_w_ = attempt.T_c_w;
+  last_quality_ = attempt.quality;
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
   for (PointSlot* slot : stage_) {
     if (!slot->searched) continue;

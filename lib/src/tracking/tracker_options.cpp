@@ -24,6 +24,9 @@ void TrackerOptions::bind(OptionRegistry* r) {
   r->bind(s, "retry_without_coarse", &retry_without_coarse,
           "a frame tracked below quality_good after a coarse stage is tracked again from the "
           "prediction without it; the better of the two is kept");
+  r->bind(s, "retry_quality_ratio", &retry_quality_ratio, 0.0, 1.0, "",
+          "...also when its quality is below this fraction of the last tracked frame's (a "
+          "sudden drop: the coarse stage pulled the pose off; 0: off)");
   r->bind(s, "fine_max_points", &fine_max_points, 10, 100000, "points",
           "points searched in the fine stage at most (random subset beyond)");
   r->bind(s, "fine_radius_px", &fine_radius_px, 1, 50, "px",

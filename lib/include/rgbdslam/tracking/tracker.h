@@ -57,6 +57,12 @@ struct TrackerOptions {
   // A result below quality_good after a coarse stage is compared with the fine stage alone
   // from the prediction; the one with the higher quality is kept.
   bool retry_without_coarse = true;
+  // ...and so is a result whose quality fell below this fraction of the last frame's: the
+  // view changes little from one frame to the next, so a sudden drop means the coarse stage
+  // pulled the pose off, even when what is left still counts as good (measured on the
+  // corridor's end wall: 0.81 -> 0.38 and a 5 cm jump, whose keyframe then triangulated the
+  // wall at 40 % of its distance and ended the run; 0: off).
+  double retry_quality_ratio = 0.6;
   int image_margin_px = 8;              // projected points this close to the border are skipped [px]
   double patch_cache_tolerance = 0.05;  // re-warp a cached patch when an entry of A changes more
   int gauss_newton_iterations = 10;     // pose iterations per stage
@@ -114,6 +120,11 @@ struct TrackerOptions {
 
   void bind(OptionRegistry* registry);  // section "tracker"
 };
+
+// Whether a frame tracked with a coarse stage, to 'quality', is tracked again from the
+// prediction without it (retry_without_coarse, quality_good, retry_quality_ratio);
+// 'last_quality' is the last accepted frame's quality (0 when there is none).
+bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality);
 
 struct TrackResult {
   enum class Status {
