@@ -157,6 +157,10 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     return;
   }
   std::printf("%s", toKeyValueText(*result).c_str());
+  // The paper's Table I: where the run ends, relative to where it started (as slam-eval).
+  if (const auto end = endPointError(*groundtruth_, trajectory, eval.max_dt_s)) {
+    std::printf("%s", toKeyValueText(*end).c_str());
+  }
 }
 
 }  // namespace rgbdslam
