@@ -100,7 +100,10 @@ class Tracker::Impl {
   TrackResult relocalise(const RgbdFrame& frame);
   TrackResult trackNormally(const RgbdFrame& frame);
   SE3 predictPose() const;
-  Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, bool allow_coarse = true);
+  // Coarse stage: kIfMoving when the start pose predicts image motion (coarseWanted),
+  // kAlways when the motion is unknown (relocalisation), kNever for the fine-only retry.
+  enum class Coarse { kIfMoving, kAlways, kNever };
+  Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, Coarse coarse = Coarse::kIfMoving);
   void saveOutcome(std::vector<SlotOutcome>* outcome) const;
   void restoreOutcome(const std::vector<SlotOutcome>& outcome);
   void projectAll(const SE3& T_c_w);
@@ -277,7 +280,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // from the last frame's (TrackerOptions::retry_quality_ratio).
   if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
     saveOutcome(&outcome_);
-    const Attempt retry = trackFrom(predicted, frame, /*allow_coarse=*/false);
+    const Attempt retry = trackFrom(predicted, frame, Coarse::kNever);
     if (retry.quality > attempt.quality) attempt = retry;
     else restoreOutcome(outcome_);
   }
@@ -304,8 +307,15 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   // The last good pose first: after a short disturbance the camera is often still near it.
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
   for (const RelocalisationCandidate& candidate : candidates) {
-    const Attempt attempt = trackFrom(candidate.T_w_c.inverse(), frame);
-    if (isLost(attempt) || attempt.quality < options_.quality_good) continue;
+    // The camera may have moved anywhere since: always the wide coarse search first.
+    const Attempt attempt = trackFrom(candidate.T_w_c.inverse(), frame, Coarse::kAlways);
+    // A keyframe's view is a guess from the small blurry image: only a good result proves
+    // it. From the last pose the bar is normal tracking's (dodgy is enough, the pose must be
+    // fixed): where many points are hidden or unmatchable for a stretch (the corridor's
+    // glass cabinets close by) the quality stays below good although the pose is right,
+    // and a tracker that lost such a stretch once would otherwise never come back.
+    const bool near_last = candidate.keyframe < 0;
+    if (isLost(attempt) || (!near_last && attempt.quality < options_.quality_good)) continue;
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
@@ -416,8 +426,7 @@ void Tracker::Impl::restoreOutcome(const std::vector<SlotOutcome>& outcome) {
   }
 }
 
-Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
-                                 bool allow_coarse) {
+Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, Coarse coarse) {
   for (PointSlot& slot : slots_) slot.searched = slot.found = false;
   SE3 T_c_w = T_c_w_start;
   projectAll(T_c_w);
@@ -426,8 +435,8 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
     if (slot->search_level >= options_.coarse_min_level) stage_.push_back(slot);
   }
   bool did_coarse = false;
-  if (allow_coarse && static_cast<int>(stage_.size()) >= options_.coarse_min_points &&
-      coarseWanted(T_c_w_start)) {
+  if (coarse != Coarse::kNever && static_cast<int>(stage_.size()) >= options_.coarse_min_points &&
+      (coarse == Coarse::kAlways || coarseWanted(T_c_w_start))) {
     did_coarse = true;
     selectSubset(&stage_, options_.coarse_max_points);
     T_c_w = runStage(stage_, T_c_w, options_.coarse_radius_px, frame, false);
