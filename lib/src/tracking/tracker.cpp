@@ -104,6 +104,9 @@ class Tracker::Impl {
   // kAlways when the motion is unknown (relocalisation), kNever for the fine-only retry.
   enum class Coarse { kIfMoving, kAlways, kNever };
   Attempt trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, Coarse coarse = Coarse::kIfMoving);
+  // Tracks again from 'start' with 'coarse'; returns whichever of that and 'attempt'
+  // explains more of its searched points, the slots left with the returned one's outcome.
+  Attempt betterOf(const Attempt& attempt, const SE3& start, const RgbdFrame& frame, Coarse coarse);
   void saveOutcome(std::vector<SlotOutcome>* outcome) const;
   void restoreOutcome(const std::vector<SlotOutcome>& outcome);
   void projectAll(const SE3& T_c_w);
@@ -279,10 +282,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // explains more of its searched points is kept. So is one whose quality dropped sharply
   // from the last frame's (TrackerOptions::retry_quality_ratio).
   if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
-    saveOutcome(&outcome_);
-    const Attempt retry = trackFrom(predicted, frame, Coarse::kNever);
-    if (retry.quality > attempt.quality) attempt = retry;
-    else restoreOutcome(outcome_);
+    attempt = betterOf(attempt, predicted, frame, Coarse::kNever);
   }
   if (isLost(attempt)) {
     state_ = TrackingState::kLost;
@@ -317,10 +317,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // room), and the attempt that explains more of its searched points is kept.
     Attempt attempt = trackFrom(start, frame, near_last ? Coarse::kNever : Coarse::kAlways);
     if (near_last && (isLost(attempt) || attempt.quality < options_.quality_good)) {
-      saveOutcome(&outcome_);
-      const Attempt wide = trackFrom(start, frame, Coarse::kAlways);
-      if (wide.quality > attempt.quality) attempt = wide;
-      else restoreOutcome(outcome_);
+      attempt = betterOf(attempt, start, frame, Coarse::kAlways);
     }
     // A keyframe's view is a guess from the small blurry image: only a good result proves
     // it. From the last pose the bar is normal tracking's (dodgy is enough, the pose must be
@@ -426,6 +423,15 @@ void Tracker::Impl::saveOutcome(std::vector<SlotOutcome>* outcome) const {
 }
 
 // Makes stage_ and the slots' search flags those of the saved attempt again.
+Attempt Tracker::Impl::betterOf(const Attempt& attempt, const SE3& start, const RgbdFrame& frame,
+                                Coarse coarse) {
+  saveOutcome(&outcome_);
+  const Attempt other = trackFrom(start, frame, coarse);
+  if (other.quality > attempt.quality) return other;
+  restoreOutcome(outcome_);
+  return attempt;
+}
+
 void Tracker::Impl::restoreOutcome(const std::vector<SlotOutcome>& outcome) {
   for (PointSlot& slot : slots_) slot.searched = slot.found = false;
   stage_.clear();
