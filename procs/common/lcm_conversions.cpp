@@ -346,6 +346,38 @@ Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg) {
   return update;
 }
 
+rgbdslam::map_receipt_t toLcm(const MapReceipt& receipt) {
+  rgbdslam::map_receipt_t msg;
+  msg.utime = receipt.utime;
+  msg.map_id = receipt.map_id;
+  msg.applied_version = receipt.applied_version;
+  msg.newest_version_seen = receipt.newest_version_seen;
+  msg.keyframes_created = receipt.keyframes_created;
+  msg.keyframes_unacked = receipt.keyframes_unacked;
+  return msg;
+}
+
+Expected<MapReceipt> fromLcm(const rgbdslam::map_receipt_t& msg) {
+  if (msg.map_id <= 0) return Error{"map receipt for map id " + std::to_string(msg.map_id) + " (must be > 0)"};
+  if (msg.applied_version < 0 || msg.newest_version_seen < msg.applied_version) {
+    return Error{"map receipt with applied version " + std::to_string(msg.applied_version) +
+                 " and newest seen " + std::to_string(msg.newest_version_seen) +
+                 " (need 0 <= applied <= newest seen)"};
+  }
+  if (msg.keyframes_created < 0 || msg.keyframes_unacked < 0 || msg.keyframes_unacked > msg.keyframes_created) {
+    return Error{"map receipt with " + std::to_string(msg.keyframes_unacked) + " of " +
+                 std::to_string(msg.keyframes_created) + " keyframes unacknowledged"};
+  }
+  MapReceipt r;
+  r.utime = msg.utime;
+  r.map_id = msg.map_id;
+  r.applied_version = msg.applied_version;
+  r.newest_version_seen = msg.newest_version_seen;
+  r.keyframes_created = msg.keyframes_created;
+  r.keyframes_unacked = msg.keyframes_unacked;
+  return r;
+}
+
 rgbdslam::status_t toLcm(const ComponentStatus& status) {
   rgbdslam::status_t msg;
   msg.utime = status.utime;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include <rgbdslam/keyframe_t.hpp>
+#include <rgbdslam/map_receipt_t.hpp>
 #include <rgbdslam/map_t.hpp>
 #include <rgbdslam/pose_t.hpp>
 #include <rgbdslam/rgbd_frame_t.hpp>
@@ -48,6 +49,9 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);
 
 rgbdslam::map_t toLcm(const MapUpdate& update);
 Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg);
+
+rgbdslam::map_receipt_t toLcm(const MapReceipt& receipt);
+Expected<MapReceipt> fromLcm(const rgbdslam::map_receipt_t& msg);
 
 rgbdslam::status_t toLcm(const ComponentStatus& status);
 Expected<ComponentStatus> fromLcm(const rgbdslam::status_t& msg);

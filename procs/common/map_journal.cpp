@@ -104,6 +104,11 @@ MapJournal::~MapJournal() {
   if (fd_ >= 0) ::close(fd_);
 }
 
+Status MapJournal::appendKeyframe(const IncomingKeyframe& keyframe) {
+  if (keyframe.encoded.empty()) return Error{path_ + ": a keyframe without its message cannot be journaled"};
+  return appendKeyframe(keyframe.encoded.data(), keyframe.encoded.size());
+}
+
 Status MapJournal::appendKeyframe(const void* data, size_t size) {
   return append(kKeyframeRecord, data, size);
 }

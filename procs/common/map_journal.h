@@ -13,11 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "rgbdslam/sync/mapper_sync.h"
 #include "rgbdslam/util/expected.h"
 
 namespace rgbdslam {
 
-class MapJournal {
+class MapJournal : public KeyframeJournal {
  public:
   struct Contents {
     std::vector<std::vector<uint8_t>> keyframes;  // encoded keyframe_t, in journal order
@@ -30,10 +31,12 @@ class MapJournal {
   MapJournal& operator=(MapJournal&& other) noexcept;
   MapJournal(const MapJournal&) = delete;
   MapJournal& operator=(const MapJournal&) = delete;
-  ~MapJournal();
+  ~MapJournal() override;
 
+  // The keyframe's message as received (IncomingKeyframe::encoded).
+  Status appendKeyframe(const IncomingKeyframe& keyframe) override;
   Status appendKeyframe(const void* data, size_t size);
-  Status appendVersion(int64_t version);
+  Status appendVersion(int64_t version) override;
   const std::string& path() const { return path_; }
 
  private:

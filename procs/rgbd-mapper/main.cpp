@@ -23,28 +23,24 @@ CommandLine makeCommandLine() {
   cli.option("keyframe-channel", "NAME", "keyframes from the tracker", "SLAM_KEYFRAME");
   cli.option("map-channel", "NAME", "map versions to the tracker", "SLAM_MAP");
   cli.option("status-channel", "NAME", "health reports", "MAPPER_STATUS");
-  cli.option("map-period", "S", "refinement deltas at most this often (a newly integrated keyframe's at once) [s]", "1");
-  cli.option("tracker-status-channel", "NAME", "the tracker's health reports (its map version)", "SLAM_STATUS");
-  cli.option("snapshot-period", "S", "full map snapshots at least this often (also when the tracker is stuck behind a lost delta) [s]", "30");
+  cli.option("receipt-channel", "NAME", "the tracker's map receipts (the version it holds)", "SLAM_MAP_RECEIPT");
   cli.option("status-period", "S", "status reports this often [s]", "1");
   addLcmUrlOption(cli);
   return cli;
 }
 
-Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli) {
+// The map protocol's periods and limits come from the configuration (section "sync").
+Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli, const SyncOptions& sync) {
   MapperNodeOptions o;
+  o.sync = sync.mapper;
   o.keyframe_channel = cli.get("keyframe-channel");
   o.map_channel = cli.get("map-channel");
   o.status_channel = cli.get("status-channel");
-  o.tracker_status_channel = cli.get("tracker-status-channel");
+  o.receipt_channel = cli.get("receipt-channel");
   o.state_dir = cli.get("state-dir") == "none" ? "" : cli.get("state-dir");
-  for (auto [name, target] : {std::pair{"map-period", &o.map_period_s},
-                              std::pair{"snapshot-period", &o.snapshot_period_s},
-                              std::pair{"status-period", &o.status_period_s}}) {
-    auto value = cli.getDouble(name);
-    if (!value || *value <= 0) return Error{std::string("--") + name + " must be a positive number of seconds"};
-    *target = *value;
-  }
+  auto period = cli.getDouble("status-period");
+  if (!period || !(*period > 0)) return Error{"--status-period must be a positive number of seconds"};
+  o.status_period_s = *period;
   return o;
 }
 
@@ -73,7 +69,7 @@ int main(int argc, char** argv) {
   if (!cli.has("camera")) return usageError("rgbd-mapper", "--camera is required (see --help)");
   auto camera = loadCamera(cli.get("camera"));
   if (!camera) return usageError("rgbd-mapper", camera.error());
-  auto options = nodeOptions(cli);
+  auto options = nodeOptions(cli, config->slam->sync);
   if (!options) return usageError("rgbd-mapper", options.error());
   if (cli.has("fresh") && !options->state_dir.empty()) {
     if (Status moved = moveJournalAside(options->state_dir); !moved) return usageError("rgbd-mapper", moved.error());

@@ -46,6 +46,14 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   auto max_frames = cli.getInt("max-frames");
   if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
   o.max_frames = *max_frames;
+  auto loss = cli.getDouble("link-loss");
+  if (!loss || !(*loss >= 0.0 && *loss <= 1.0)) return Error{"--link-loss must be a fraction from 0 to 1"};
+  auto delay = cli.getDouble("link-delay-ms");
+  if (!delay || !(*delay >= 0.0 && *delay <= 60000.0)) return Error{"--link-delay-ms must be 0 to 60000 ms"};
+  auto seed = cli.getInt("link-seed");
+  if (!seed || *seed < 0 || *seed > 0xffffffffL) return Error{"--link-seed must be 0 to 4294967295"};
+  o.link.loss = *loss, o.link.delay_ms = *delay, o.link.seed = static_cast<uint32_t>(*seed);
+  if (o.link.imperfect() && !o.deterministic) return Error{"--link-loss and --link-delay-ms need --deterministic"};
   return o;
 }
 
@@ -83,7 +91,7 @@ BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
   std::cerr << "rgbd-slam: " << source_->describe() << ", camera " << camera_.name << ", "
             << (options_.deterministic ? "deterministic" : "concurrent mapper") << "\n"
             << "configuration:\n" << options_.config.registry->describe();
-  slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic);
+  slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic, options_.link);
 }
 
 void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
@@ -139,6 +147,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   const SlamStats stats = slam_->stats();
   std::printf("frames %ld\nposes %zu\nkeyframes %ld\nmap_points %ld\nlost_frames %ld\nbad_frames %ld\n",
               stats.frames, trajectory.size(), stats.keyframes, stats.points, stats.lost_frames, bad_frames_);
+  std::printf("keyframe_sends %ld\nmaps_applied %ld\nmaps_missing_delta %ld\nsnapshots %ld\nlink_lost %ld\n",
+              stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.snapshots, stats.link_lost);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   rusage usage{};

@@ -25,6 +25,7 @@ struct BatchOptions {
   bool quiet = false;
   std::string groundtruth_path;            // empty: the source's own
   SlamConfig config;                       // the SLAM options and their registry
+  LinkOptions link;                        // deterministic: the simulated link (perfect by default)
 
   static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
 };

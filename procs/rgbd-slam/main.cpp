@@ -16,6 +16,9 @@ CommandLine makeCommandLine() {
   cli.option("camera", "FILE", "camera calibration YAML (required except for synth:)");
   cli.option("output", "TRAJ.txt", "trajectory in TUM format (every frame that got a pose)");
   cli.flag("deterministic", "process every frame; the mapper finishes each keyframe before the next frame");
+  cli.option("link-loss", "P", "deterministic: tracker and mapper talk over a simulated link losing this fraction of messages each way [0-1]", "0");
+  cli.option("link-delay-ms", "MS", "deterministic: ...delaying every message this long, in the frames' time [ms]", "0");
+  cli.option("link-seed", "N", "deterministic: seed of the simulated link's losses", "1");
   addSlamConfigOptions(cli);
   cli.option("groundtruth", "FILE", "ground truth in TUM format", "the source's own, if any");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");

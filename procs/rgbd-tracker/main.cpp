@@ -24,10 +24,8 @@ CommandLine makeCommandLine() {
   cli.option("pose-channel", "NAME", "poses out (local bus)", "SLAM_POSE");
   cli.option("keyframe-channel", "NAME", "keyframes out (link)", "SLAM_KEYFRAME");
   cli.option("map-channel", "NAME", "maps in (link)", "SLAM_MAP");
+  cli.option("receipt-channel", "NAME", "map receipts out (link)", "SLAM_MAP_RECEIPT");
   cli.option("status-channel", "NAME", "health reports (link)", "SLAM_STATUS");
-  cli.option("resend-period", "S", "first re-send of an unacknowledged keyframe after this; the interval then doubles [s]", "1");
-  cli.option("resend-max-period", "S", "the re-send interval grows to this at most [s]", "4");
-  cli.option("resend-max", "N", "keyframes re-sent at one time at most, oldest first", "2");
   cli.option("status-period", "S", "status reports this often [s]", "1");
   cli.option("max-backlog", "N", "frames waiting to be tracked at most; a newer frame pushes out the oldest [frames]", "2");
   cli.option("keyframe-grey", "jpeg|png", "keyframe image on the link (png is lossless)", "jpeg");
@@ -39,14 +37,15 @@ CommandLine makeCommandLine() {
   return cli;
 }
 
-Expected<TrackerNodeOptions> nodeOptions(const CommandLine& cli) {
+// The map protocol's periods and limits come from the configuration (section "sync").
+Expected<TrackerNodeOptions> nodeOptions(const CommandLine& cli, const SyncOptions& sync) {
   TrackerNodeOptions o;
+  o.outbox = sync.outbox;
+  o.receipt_period_s = sync.receipt_period_s;
   o.frame_channel = cli.get("frame-channel"), o.pose_channel = cli.get("pose-channel");
   o.keyframe_channel = cli.get("keyframe-channel"), o.map_channel = cli.get("map-channel");
-  o.status_channel = cli.get("status-channel");
-  for (auto [name, target, min] : {std::tuple{"resend-period", &o.resend_period_s, 1e-3},
-                                   std::tuple{"resend-max-period", &o.resend_max_period_s, 1e-3},
-                                   std::tuple{"status-period", &o.status_period_s, 1e-3},
+  o.status_channel = cli.get("status-channel"), o.receipt_channel = cli.get("receipt-channel");
+  for (auto [name, target, min] : {std::tuple{"status-period", &o.status_period_s, 1e-3},
                                    std::tuple{"exit-after-idle", &o.exit_after_idle_s, 0.0},
                                    std::tuple{"ack-wait", &o.ack_wait_s, 0.0}}) {
     auto value = cli.getDouble(name);
@@ -56,9 +55,6 @@ Expected<TrackerNodeOptions> nodeOptions(const CommandLine& cli) {
   auto backlog = cli.getInt("max-backlog");
   if (!backlog || *backlog < 1) return Error{"--max-backlog must be >= 1"};
   o.max_backlog_frames = static_cast<int>(*backlog);
-  auto resend_max = cli.getInt("resend-max");
-  if (!resend_max || *resend_max < 1) return Error{"--resend-max must be >= 1"};
-  o.resend_max = static_cast<int>(*resend_max);
   const std::string grey = cli.get("keyframe-grey"), depth = cli.get("keyframe-depth");
   if (grey != "jpeg" && grey != "png") return Error{"--keyframe-grey must be jpeg or png"};
   if (depth != "full" && depth != "half" && depth != "quarter") return Error{"--keyframe-depth must be full, half or quarter"};
@@ -94,7 +90,7 @@ int main(int argc, char** argv) {
   if (!cli.has("camera")) return usageError("rgbd-tracker", "--camera is required (see --help)");
   auto camera = loadCamera(cli.get("camera"));
   if (!camera) return usageError("rgbd-tracker", camera.error());
-  auto options = nodeOptions(cli);
+  auto options = nodeOptions(cli, config->slam->sync);
   if (!options) return usageError("rgbd-tracker", options.error());
   auto map_id = mapId(cli);
   if (!map_id) return usageError("rgbd-tracker", map_id.error());

@@ -18,6 +18,15 @@ double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_cl
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+int64_t steadyUs(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count();
+}
+
+bool elapsed(std::chrono::steady_clock::time_point since, std::chrono::steady_clock::time_point now,
+             double period_s) {
+  return since == std::chrono::steady_clock::time_point{} || msBetween(since, now) >= period_s * 1000;
+}
+
 bool hasPose(TrackResult::Status status) {
   return status == TrackResult::Status::kInitialised || status == TrackResult::Status::kTracked ||
          status == TrackResult::Status::kRelocalised;
@@ -29,7 +38,8 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
                          const TrackerOptions& tracker_options, SlamMode mode, int64_t map_id,
                          TrackerNodeOptions options)
     : local_(local), link_(link), options_(std::move(options)),
-      tracker_(camera, tracker_options, mode, map_id), map_id_(map_id) {}
+      tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
+      sync_(map_id, options_.outbox) {}
 
 int TrackerNode::run(const std::atomic<bool>& stop) {
   auto frames = subscribeRaw(local_, options_.frame_channel, this, &TrackerNode::onFrame);
@@ -38,8 +48,12 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   while (!stop) {
     handleAvailable(kLoopTimeoutMs);
     const auto now = Clock::now();
-    resendDue(now);
-    if (last_status_ == Clock::time_point{} || msBetween(last_status_, now) >= options_.status_period_s * 1000) {
+    resendDue();
+    if (elapsed(last_receipt_, now, options_.receipt_period_s)) {
+      last_receipt_ = now;
+      publishReceipt();
+    }
+    if (elapsed(last_status_, now, options_.status_period_s)) {
       last_status_ = now;
       publishStatus();
     }
@@ -49,10 +63,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
-    if (unacked_.empty() || msBetween(finishing_since, now) >= options_.ack_wait_s * 1000) break;
+    if (sync_.outbox().empty() || msBetween(finishing_since, now) >= options_.ack_wait_s * 1000) break;
   }
   publishStatus();
-  return unacked_.empty() ? 0 : 1;
+  return sync_.outbox().empty() ? 0 : 1;
 }
 
 // Handles everything that has arrived (map messages at once; frames into the backlog), then
@@ -118,33 +132,22 @@ void TrackerNode::trackFrame(const Received& received) {
 
 void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
   const rgbdslam::keyframe_t msg = toLcm(keyframe, options_.encoding);
-  Outgoing out;
-  out.bytes.resize(msg.getEncodedSize());
-  msg.encode(out.bytes.data(), 0, static_cast<int>(out.bytes.size()));
-  out.created = Clock::now();
-  out.interval_s = options_.resend_period_s;
-  out.next_send = out.created + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(out.interval_s));
-  out.sends = 1;
-  link_->publish(options_.keyframe_channel, out.bytes.data(), static_cast<unsigned>(out.bytes.size()));
+  std::vector<uint8_t> bytes(msg.getEncodedSize());
+  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  link_->publish(options_.keyframe_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
   ++counters_.keyframes;
   ++counters_.keyframe_sends;
-  counters_.keyframe_bytes += static_cast<long>(out.bytes.size());
-  created_[keyframe.id] = out.created;
-  unacked_[keyframe.id] = std::move(out);
+  counters_.keyframe_bytes += static_cast<long>(bytes.size());
+  const auto now = Clock::now();
+  created_[keyframe.id] = now;
+  sync_.send(keyframe.id, std::move(bytes), steadyUs(now));
 }
 
-void TrackerNode::resendDue(Clock::time_point now) {
-  int sent = 0;
-  for (auto& [id, out] : unacked_) {
-    if (sent >= options_.resend_max) break;
-    if (now < out.next_send) continue;
-    link_->publish(options_.keyframe_channel, out.bytes.data(), static_cast<unsigned>(out.bytes.size()));
-    out.interval_s = std::min(2 * out.interval_s, std::max(options_.resend_max_period_s, options_.resend_period_s));
-    out.next_send = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(out.interval_s));
-    ++out.sends;
-    ++sent;
+void TrackerNode::resendDue() {
+  for (const std::vector<uint8_t>* bytes : sync_.resendsDue(steadyUs(Clock::now()))) {
+    link_->publish(options_.keyframe_channel, bytes->data(), static_cast<unsigned>(bytes->size()));
     ++counters_.keyframe_sends;
-    counters_.keyframe_bytes += static_cast<long>(out.bytes.size());
+    counters_.keyframe_bytes += static_cast<long>(bytes->size());
   }
 }
 
@@ -157,36 +160,36 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
     return;
   }
   ++counters_.maps_received;
-  if (update->map_id != map_id_) {
-    ++counters_.maps_foreign;
-    std::cerr << "rgbd-tracker: ignoring map version " << update->version << " of map " << update->map_id
-              << " (this tracker's map is " << map_id_ << ")\n";
-    return;
-  }
-  newest_version_seen_ = std::max(newest_version_seen_, update->version);
   const auto now = Clock::now();
-  for (KeyframeId id : update->acked_keyframes) {
-    auto it = unacked_.find(id);
-    if (it == unacked_.end()) continue;
-    ack_ms_.add(msBetween(it->second.created, now));
-    ++counters_.keyframes_acked;
-    unacked_.erase(it);
-  }
-  switch (tracker_.applyMapUpdate(*update)) {
-    case Tracker::UpdateStatus::kApplied: ++counters_.maps_applied; break;
-    case Tracker::UpdateStatus::kUnknownKeyframe: ++counters_.maps_unknown_keyframe; ++counters_.maps_applied; break;
-    case Tracker::UpdateStatus::kStale:
+  const MapReceiveResult r = sync_.receive(*update, steadyUs(now),
+                                           [this](const MapUpdate& u) { return tracker_.applyMap(u); });
+  for (double age_s : r.ack_latencies_s) ack_ms_.add(age_s * 1000.0);
+  counters_.keyframes_acked += static_cast<long>(r.ack_latencies_s.size());
+  const int64_t holding = sync_.follower().version();
+  switch (r.verdict) {
+    case MapVerdict::kApply:
+      ++counters_.maps_applied;
+      if (r.unknown_keyframes) ++counters_.maps_unknown_keyframe;
+      break;
+    case MapVerdict::kStale:
       ++counters_.maps_stale;
-      std::cerr << "rgbd-tracker: ignoring stale map version " << update->version << " (holding "
-                << tracker_.mapVersion() << "; a repeat, or from the past)\n";
+      std::cerr << "rgbd-tracker: ignoring stale map version " << update->version << " (holding " << holding
+                << "; a repeat, or from the past)\n";
       return;
-    case Tracker::UpdateStatus::kMissingDelta:
+    case MapVerdict::kMissingDelta:
       ++counters_.maps_missing_delta;
       std::cerr << "rgbd-tracker: map version " << update->version << " is a delta after a lost one (holding "
-                << tracker_.mapVersion() << "); waiting for a snapshot\n";
+                << holding << "); waiting for a snapshot\n";
       return;
-    case Tracker::UpdateStatus::kForeignMap:
+    case MapVerdict::kForeignMap:
       ++counters_.maps_foreign;
+      std::cerr << "rgbd-tracker: ignoring map version " << update->version << " of map " << update->map_id
+                << " (this tracker's map is " << map_id_ << ")\n";
+      return;
+    case MapVerdict::kImplausible:
+      ++counters_.maps_implausible;
+      std::cerr << "rgbd-tracker: ignoring map version " << update->version << ": implausibly far ahead of "
+                << holding << "\n";
       return;
   }
   for (KeyframeId id : update->acked_keyframes) {
@@ -197,6 +200,11 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
   }
 }
 
+void TrackerNode::publishReceipt() {
+  const rgbdslam::map_receipt_t msg = toLcm(sync_.receipt(utimeNow()));
+  link_->publish(options_.receipt_channel, &msg);
+}
+
 void TrackerNode::publishStatus() {
   ComponentStatus status;
   status.utime = utimeNow();
@@ -204,11 +212,11 @@ void TrackerNode::publishStatus() {
   status.state = toString(state_);
   const Counters& c = counters_;
   status.counters = {{"map_id", map_id_},
-                     {"map_version", tracker_.mapVersion()},
-                     {"map_version_newest_seen", newest_version_seen_},
+                     {"map_version", sync_.follower().version()},
+                     {"map_version_newest_seen", sync_.follower().newestSeen()},
                      {"keyframes", c.keyframes},
                      {"keyframes_acked", c.keyframes_acked},
-                     {"keyframes_unacked", static_cast<int64_t>(unacked_.size())},
+                     {"keyframes_unacked", static_cast<int64_t>(sync_.outbox().size())},
                      {"keyframe_sends", c.keyframe_sends},
                      {"keyframe_bytes", c.keyframe_bytes},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
@@ -226,7 +234,8 @@ void TrackerNode::publishStatus() {
                      {"maps_stale", c.maps_stale},
                      {"maps_foreign", c.maps_foreign},
                      {"maps_missing_delta", c.maps_missing_delta},
-                     {"maps_unknown_keyframe", c.maps_unknown_keyframe}};
+                     {"maps_unknown_keyframe", c.maps_unknown_keyframe},
+                     {"maps_implausible", c.maps_implausible}};
   status.timings_ms = {{"track_ms_median", track_ms_.quantile(0.5)},
                        {"track_ms_p99", track_ms_.quantile(0.99)},
                        {"latency_ms_median", latency_ms_.quantile(0.5)},
@@ -250,10 +259,10 @@ void TrackerNode::printSummary() const {
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
-              c.keyframes, c.keyframes_acked, unacked_.size(), c.keyframe_sends, c.keyframe_bytes);
-  std::printf("map_version_newest_seen %lld\n", static_cast<long long>(newest_version_seen_));
+              c.keyframes, c.keyframes_acked, sync_.outbox().size(), c.keyframe_sends, c.keyframe_bytes);
+  std::printf("map_version_newest_seen %lld\n", static_cast<long long>(sync_.follower().newestSeen()));
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",
-              static_cast<long long>(tracker_.mapVersion()), c.maps_received, c.maps_applied, c.maps_stale,
+              static_cast<long long>(sync_.follower().version()), c.maps_received, c.maps_applied, c.maps_stale,
               c.maps_missing_delta, c.maps_foreign);
   std::printf("arrival_ms_median %.3f\nframe_ms_median %.3f\nframe_ms_p99 %.3f\n", arrival_ms_.quantile(0.5),
               frame_ms_.quantile(0.5), frame_ms_.quantile(0.99));

@@ -10,7 +10,7 @@
 #                                                 acknowledged, or after 20 s), stops the rest,
 #                                                 evaluates: DIR/eval.txt, DIR/link.json
 # The tracker publishes keyframes and status on the onboard bus; the relays carry
-# SLAM_KEYFRAME|SLAM_STATUS to the link and SLAM_MAP|MAPPER_STATUS back, each after the delay.
+# SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS to the link and SLAM_MAP|MAPPER_STATUS back, each after the delay.
 SPLIT_MAP_ID=77  # fixed, so the tests can address the map
 
 split_value() { awk -v k="$1" '$1 == k {print $2}' "$2"; }
@@ -23,7 +23,7 @@ split_start() {
       --state-dir "$dir/mapper-state" --lcm-url "$LINK_URL" "$@" > "$dir/mapper.out" 2> "$dir/mapper.err"
   bg_ground SPLIT_LINKLOG lcm-logger -q -f --lcm-url="$LINK_URL" "$dir/link.lcm"
   bg_onboard SPLIT_UP "$TOOLS/lcm-link-relay" --from "$LOCAL_URL" --to "$LINK_URL" \
-      --channels 'SLAM_KEYFRAME|SLAM_STATUS' --delay-ms "$delay" --timeout 300 --name up 2> "$dir/relay-up.err"
+      --channels 'SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS' --delay-ms "$delay" --timeout 300 --name up 2> "$dir/relay-up.err"
   bg_onboard SPLIT_DOWN "$TOOLS/lcm-link-relay" --from "$LINK_URL" --to "$LOCAL_URL" \
       --channels 'SLAM_MAP|MAPPER_STATUS' --delay-ms "$delay" --timeout 300 --name down 2> "$dir/relay-down.err"
   bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"

@@ -15,7 +15,7 @@
 #                                 B also map-stale (version 1 of map 77)
 #   SLAM_KEYFRAME  (mapper)       truncated, oversized, wrongtype, garbage;
 #                                 B also keyframe-foreign-map (after keyframe 0 exists)
-#   SLAM_STATUS    (mapper)       garbage
+#   SLAM_MAP_RECEIPT (mapper)     garbage
 #   SLAM_POSE      (pose-logger)  truncated, oversized, wrongtype, garbage
 source "$(dirname "$0")/common.sh"
 source "$(dirname "$0")/link.sh"
@@ -65,7 +65,7 @@ batch() {
   for kind in truncated oversized wrongtype garbage; do bad SLAM_MAP $kind --type map; done
   bad SLAM_MAP map-foreign-map
   for kind in truncated oversized wrongtype garbage; do bad SLAM_KEYFRAME $kind --type keyframe; done
-  bad SLAM_STATUS garbage
+  bad SLAM_MAP_RECEIPT garbage
   for kind in truncated oversized wrongtype garbage; do bad SLAM_POSE $kind --type pose; done
 }
 frames() {  # frames N: N presses of Enter at ~30 Hz
@@ -132,8 +132,8 @@ echo "tracker counts: bad_messages $(value bad_messages "$t") (stderr: RGBD_FRAM
      "maps_stale $(status_value maps_stale "$dir/tracker-status.txt") maps_foreign $(status_value maps_foreign "$dir/tracker-status.txt")"
 echo "mapper: $summary"
 echo "mapper counts: stderr SLAM_KEYFRAME $(count 'bad message on SLAM_KEYFRAME' "$dir/mapper.err"), foreign $(count 'of map 424242' "$dir/mapper.err")," \
-     "SLAM_STATUS $(count 'bad message on SLAM_STATUS' "$dir/mapper.err"); MAPPER_STATUS: bad_messages $(status_value bad_messages "$dir/mapper-status.txt")" \
-     "foreign_map_keyframes $(status_value foreign_map_keyframes "$dir/mapper-status.txt") bad_status_messages $(status_value bad_status_messages "$dir/mapper-status.txt")"
+     "SLAM_MAP_RECEIPT $(count 'bad message on SLAM_MAP_RECEIPT' "$dir/mapper.err"); MAPPER_STATUS: bad_messages $(status_value bad_messages "$dir/mapper-status.txt")" \
+     "foreign_map_keyframes $(status_value foreign_map_keyframes "$dir/mapper-status.txt") bad_receipts $(status_value bad_receipts "$dir/mapper-status.txt")"
 echo "pose-logger: $(grep '^pose-logger: [0-9]' "$dir/logger.err") (stderr SLAM_POSE $(count 'bad message on SLAM_POSE' "$dir/logger.err"))"
 echo "exit on SIGINT: tracker $(cat "$dir/TRACKER.exit"), mapper $(cat "$dir/MAPPER.exit"), pose-logger $(cat "$dir/LOGGER.exit"), lcm-logger $(cat "$dir/STATUSLOG.exit"); test time $((SECONDS - t_test)) s"
 
@@ -177,8 +177,8 @@ grep -qiE 'stale|version 1 of map 77|map version 1 ' "$dir/tracker.err" \
 [ "$(count 'of map 424242' "$dir/mapper.err")" = 1 ] && [ "$mapper_foreign" = 1 ] \
   && [ "$(status_value foreign_map_keyframes "$dir/mapper-status.txt")" = 1 ] \
   || fail "foreign keyframe: $(count 'of map 424242' "$dir/mapper.err") logged, $mapper_foreign in the summary, of 1"
-[ "$(count 'bad message on SLAM_STATUS' "$dir/mapper.err")" = 2 ] && [ "$(status_value bad_status_messages "$dir/mapper-status.txt")" = 2 ] \
-  || fail "bad SLAM_STATUS: $(count 'bad message on SLAM_STATUS' "$dir/mapper.err") logged, $(status_value bad_status_messages "$dir/mapper-status.txt") counted, of 2"
+[ "$(count 'bad message on SLAM_MAP_RECEIPT' "$dir/mapper.err")" = 2 ] && [ "$(status_value bad_receipts "$dir/mapper-status.txt")" = 2 ] \
+  || fail "bad SLAM_MAP_RECEIPT: $(count 'bad message on SLAM_MAP_RECEIPT' "$dir/mapper.err") logged, $(status_value bad_receipts "$dir/mapper-status.txt") counted, of 2"
 # pose-logger.
 [ "$(count 'bad message on SLAM_POSE' "$dir/logger.err")" = 8 ] && [ "$logger_bad" = 8 ] \
   || fail "bad poses: $(count 'bad message on SLAM_POSE' "$dir/logger.err") logged, $logger_bad counted, of 8"

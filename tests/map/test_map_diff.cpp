@@ -32,9 +32,13 @@ TEST(MapDiffer, SnapshotHoldsEverythingAndAnUnchangedMapGivesAnEmptyDelta) {
   EXPECT_TRUE(snapshot.is_snapshot);
   EXPECT_EQ(snapshot.keyframes.size(), 2u);
   EXPECT_EQ(snapshot.points.size(), 3u);
-  MapUpdate delta = differ.delta(map);
+  MapChanges touched;  // reported changed, but nothing moved
+  touched.points = {1, 2, 3};
+  touched.keyframes = {0, 1};
+  MapUpdate delta = differ.delta(map, touched);
   EXPECT_FALSE(delta.is_snapshot);
-  EXPECT_TRUE(differ.empty(delta));
+  EXPECT_TRUE(delta.keyframes.empty() && delta.points.empty() && delta.moved_points.empty() &&
+              delta.removed_points.empty());
 }
 
 TEST(MapDiffer, SendsMovesAboveTheThresholdNewPointsAndRemovals) {
@@ -49,7 +53,11 @@ TEST(MapDiffer, SendsMovesAboveTheThresholdNewPointsAndRemovals) {
   p.source_keyframe = 1;
   map.addPoint(p);
   map.keyframe(1)->T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1, 0.01, 0));
-  MapUpdate delta = differ.delta(map);
+  MapChanges changes;
+  changes.points = {1, 2, 4};
+  changes.removed_points = {3};
+  changes.keyframes = {0, 1};
+  MapUpdate delta = differ.delta(map, changes);
   ASSERT_EQ(delta.points.size(), 1u);  // the new one, in full
   EXPECT_EQ(delta.points[0].id, 4);
   ASSERT_EQ(delta.moved_points.size(), 1u);  // the moved one, position only
@@ -67,9 +75,43 @@ TEST(MapDiffer, SlowDriftAccumulatesUntilItCrossesTheThreshold) {
   differ.snapshot(map);
   for (int step = 1; step <= 3; ++step) {
     map.point(1)->p_w.x() += 0.0004;  // 0.4, 0.8, 1.2 mm from the published position
-    MapUpdate delta = differ.delta(map);
+    MapChanges changes;
+    changes.points = {1};
+    MapUpdate delta = differ.delta(map, changes);
     EXPECT_EQ(delta.moved_points.size(), step == 3 ? 1u : 0u) << "step " << step;
   }
+}
+
+TEST(MapDiffer, AnnouncesEveryRemovalAndSkipsPointsAddedAndRemovedSincePublished) {
+  Map map = makeMap();
+  MapDiffer differ;
+  differ.snapshot(map);
+  MapPoint p;
+  p.id = 7;  // a point the tracker may hold (provisional), never published
+  p.source_keyframe = 1;
+  map.addPoint(p);
+  map.removePoint(7);
+  MapChanges changes;
+  changes.removed_points = {7};
+  MapUpdate delta = differ.delta(map, changes);
+  EXPECT_TRUE(delta.points.empty());
+  ASSERT_EQ(delta.removed_points.size(), 1u);
+  EXPECT_EQ(delta.removed_points[0], 7);
+}
+
+TEST(MapChanges, MergeKeepsTheLaterOfAnAdditionAndARemoval) {
+  MapChanges a, b;
+  a.points = {1, 2};
+  b.removed_points = {2};
+  b.points = {3};
+  a.merge(b);
+  EXPECT_EQ(a.points, (std::set<PointId>{1, 3}));
+  EXPECT_EQ(a.removed_points, (std::set<PointId>{2}));
+  MapChanges c;
+  c.points = {2};  // re-added after removal
+  a.merge(c);
+  EXPECT_TRUE(a.points.count(2));
+  EXPECT_FALSE(a.removed_points.count(2));
 }
 
 }  // namespace

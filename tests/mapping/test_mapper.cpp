@@ -1,6 +1,7 @@
 // Mapper: in-order integration, culling, interruption, determinism, and the accuracy of the
 // keyframe poses after local + global BA from tracker-like input in the three modes.
 #include "rgbdslam/mapping/mapper.h"
+#include "rgbdslam/map/map_diff.h"
 
 #include <gtest/gtest.h>
 
@@ -135,8 +136,6 @@ PoseErrors runMode(SlamMode mode, int num_keyframes, MapUpdate* snapshot = nullp
   for (const KeyframeData& kf : seq.keyframes) {
     const MapperResult r = mapper.addKeyframe(kf);
     EXPECT_EQ(r.status, MapperResult::Status::kIntegrated) << r.error;
-    EXPECT_EQ(r.update.version, mapper.version());
-    EXPECT_EQ(r.update.acked_keyframes.size(), static_cast<size_t>(kf.id + 1));
   }
   const int steps = refineUntilDone(&mapper);
   EXPECT_LT(steps, 60) << "refine did not converge";
@@ -145,7 +144,7 @@ PoseErrors runMode(SlamMode mode, int num_keyframes, MapUpdate* snapshot = nullp
   std::printf("%-10s keyframes %d, points %zu, refine steps %d: position max %.4f m rms %.4f m, rotation max %.3f deg; similarity-aligned rms %.4f m, scale %.4f\n",
               slamModeName(mode), num_keyframes, mapper.map().numPoints(), steps, e.max_position_m,
               e.rms_position_m, e.max_rotation_deg, e.similarity_rms_m, e.scale);
-  if (snapshot) *snapshot = mapper.snapshot();
+  if (snapshot) *snapshot = MapDiffer().snapshot(mapper.map());
   return e;
 }
 
@@ -173,40 +172,30 @@ TEST(Mapper, MonoIsWorstAndDepthModesRecoverPoses) {
   EXPECT_LT(depth_init.rms_position_m, mono.rms_position_m);
 }
 
-TEST(Mapper, IntegratesInIdOrderOnly) {
+// Ordering, duplicates and foreign maps are the intake's (tests/sync); the mapper refuses a
+// keyframe it already holds and reports what each call changed.
+TEST(Mapper, ReportsWhatChangedAndRefusesAKeyframeItHolds) {
   const Sequence seq = makeSequence(SlamMode::kDepthBa, 3);
   Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
-  EXPECT_EQ(mapper.addKeyframe(seq.keyframes[1]).status, MapperResult::Status::kOutOfOrder);
-  EXPECT_EQ(mapper.map().numKeyframes(), 0u);
-  MapperResult r = mapper.addKeyframe(seq.keyframes[0]);
-  ASSERT_EQ(r.status, MapperResult::Status::kIntegrated);
-  EXPECT_EQ(r.update.version, 1);
-  EXPECT_GT(r.update.points.size(), 100u);
-  const size_t points = mapper.map().numPoints();
-  r = mapper.addKeyframe(seq.keyframes[0]);
-  EXPECT_EQ(r.status, MapperResult::Status::kDuplicate);
-  EXPECT_EQ(r.update.version, 1);
-  EXPECT_EQ(r.update.acked_keyframes, std::vector<KeyframeId>{0});
-  EXPECT_EQ(mapper.map().numPoints(), points);
-  r = mapper.addKeyframe(seq.keyframes[2]);
-  EXPECT_EQ(r.status, MapperResult::Status::kOutOfOrder);
-  EXPECT_EQ(mapper.version(), 1);
-  EXPECT_EQ(mapper.addKeyframe(seq.keyframes[1]).status, MapperResult::Status::kIntegrated);
-  r = mapper.addKeyframe(seq.keyframes[2]);
-  EXPECT_EQ(r.status, MapperResult::Status::kIntegrated);
-  EXPECT_EQ(r.update.acked_keyframes, (std::vector<KeyframeId>{0, 1, 2}));
-  EXPECT_EQ(r.update.version, 3);
-  KeyframeData foreign = seq.keyframes[2];
-  foreign.map_id = 99, foreign.id = 3;
-  r = mapper.addKeyframe(foreign);
-  EXPECT_EQ(r.status, MapperResult::Status::kForeignMap);
-  EXPECT_FALSE(r.error.empty());
-  EXPECT_EQ(mapper.map().numKeyframes(), 3u);
-  const MapUpdate snap = mapper.snapshot();
-  EXPECT_TRUE(snap.is_snapshot);
-  EXPECT_EQ(snap.version, mapper.version());
-  EXPECT_EQ(snap.keyframes.size(), 3u);
-  EXPECT_EQ(snap.points.size(), mapper.map().numPoints());
+  ASSERT_EQ(mapper.addKeyframe(seq.keyframes[0]).status, MapperResult::Status::kIntegrated);
+  MapChanges changes = mapper.takeChanges();
+  EXPECT_EQ(changes.keyframes, std::set<KeyframeId>{0});
+  EXPECT_EQ(changes.points.size(), mapper.map().numPoints());
+  EXPECT_GT(changes.points.size(), 100u);
+  EXPECT_TRUE(mapper.takeChanges().empty());
+  const MapperResult again = mapper.addKeyframe(seq.keyframes[0]);
+  EXPECT_EQ(again.status, MapperResult::Status::kBadKeyframe);
+  EXPECT_NE(again.error.find("already"), std::string::npos) << again.error;
+  ASSERT_EQ(mapper.addKeyframe(seq.keyframes[1]).status, MapperResult::Status::kIntegrated);
+  changes = mapper.takeChanges();
+  EXPECT_TRUE(changes.keyframes.count(1));  // local BA moves keyframe 1 (keyframe 0 is fixed)
+  EXPECT_FALSE(changes.keyframes.count(0));
+  int steps = 0;
+  while (steps < 60 && mapper.refine()) {
+    EXPECT_FALSE(mapper.takeChanges().empty()) << "refine() said it changed the map";
+    ++steps;
+  }
+  EXPECT_TRUE(mapper.takeChanges().empty()) << "a converged refine() changes nothing";
 }
 
 // In mono every point comes from epipolar search; a keyframe searches against a second
@@ -273,9 +262,10 @@ TEST(Mapper, CullsAPointWhoseMeasurementsAreGrossOutliers) {
   EXPECT_EQ(mapper.map().observers(bad).size(), 3u);
   std::vector<PointId> removed;
   for (int i = 0; i < 60; ++i) {
-    const auto update = mapper.refine();
-    if (!update) break;
-    removed.insert(removed.end(), update->removed_points.begin(), update->removed_points.end());
+    const bool changed = mapper.refine();
+    const MapChanges changes = mapper.takeChanges();
+    removed.insert(removed.end(), changes.removed_points.begin(), changes.removed_points.end());
+    if (!changed) break;
   }
   EXPECT_FALSE(mapper.map().point(bad));
   EXPECT_NE(std::find(removed.begin(), removed.end(), bad), removed.end());
@@ -321,7 +311,6 @@ TEST(Mapper, IsDeterministic) {
   for (size_t i = 0; i < a.keyframes.size(); ++i) {
     EXPECT_EQ(a.keyframes[i].T_w_c.matrix(), b.keyframes[i].T_w_c.matrix());
   }
-  EXPECT_EQ(a.version, b.version);
 }
 
 }  // namespace

@@ -4,9 +4,19 @@
 
 namespace rgbdslam {
 
-MapUpdate MapDiffer::delta(const Map& map) {
+void MapChanges::merge(const MapChanges& later) {
+  keyframes.insert(later.keyframes.begin(), later.keyframes.end());
+  for (PointId id : later.removed_points) points.erase(id);
+  for (PointId id : later.points) removed_points.erase(id);
+  points.insert(later.points.begin(), later.points.end());
+  removed_points.insert(later.removed_points.begin(), later.removed_points.end());
+}
+
+MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes) {
   MapUpdate update;
-  for (const auto& [id, kf] : map.keyframes()) {
+  for (KeyframeId id : changes.keyframes) {  // std::set: id order
+    const Keyframe* kf = map.keyframe(id);
+    if (!kf) continue;
     auto it = keyframes_.find(id);
     const bool moved =
         it == keyframes_.end() ||
@@ -16,38 +26,34 @@ MapUpdate MapDiffer::delta(const Map& map) {
     update.keyframes.push_back({id, kf->T_w_c});
     keyframes_[id] = kf->T_w_c;
   }
-  for (const auto& [id, point] : map.points()) {
+  for (PointId id : changes.points) {
+    const MapPoint* point = map.point(id);
+    if (!point) continue;  // added and removed again since: in neither list
     auto it = points_.find(id);
     if (it == points_.end()) {
-      update.points.push_back(point.data());
-      points_[id] = point.p_w;
-    } else if ((point.p_w - it->second).norm() > options_.point_move_m) {
-      update.moved_points.push_back({id, point.p_w});
-      it->second = point.p_w;
+      update.points.push_back(point->data());
+      points_[id] = point->p_w;
+    } else if ((point->p_w - it->second).norm() > options_.point_move_m) {
+      update.moved_points.push_back({id, point->p_w});
+      it->second = point->p_w;
     }
   }
-  for (auto it = points_.begin(); it != points_.end();) {
-    if (map.point(it->first)) {
-      ++it;
-      continue;
-    }
-    update.removed_points.push_back(it->first);
-    it = points_.erase(it);
+  // Every removal, published or not: the tracker may hold a point that was never published
+  // (its own provisional points of a keyframe).
+  for (PointId id : changes.removed_points) {
+    points_.erase(id);
+    update.removed_points.push_back(id);
   }
-  // Deterministic order (the map's point table is unordered).
-  std::sort(update.points.begin(), update.points.end(),
-            [](const MapPointData& a, const MapPointData& b) { return a.id < b.id; });
-  std::sort(update.moved_points.begin(), update.moved_points.end(),
-            [](const PointPosition& a, const PointPosition& b) { return a.id < b.id; });
-  std::sort(update.removed_points.begin(), update.removed_points.end());
   return update;
 }
 
 MapUpdate MapDiffer::snapshot(const Map& map) {
   points_.clear();
   keyframes_.clear();
-  MapUpdate update = delta(map);
-  update.removed_points.clear();
+  MapChanges everything;
+  for (const auto& [id, kf] : map.keyframes()) everything.keyframes.insert(id);
+  for (const auto& [id, point] : map.points()) everything.points.insert(id);
+  MapUpdate update = delta(map, everything);
   update.is_snapshot = true;
   return update;
 }

@@ -66,13 +66,15 @@ MapBaProblem buildBaProblem(const Map& map, const PinholeCamera& camera,
   return ba;
 }
 
-void writeBackBa(const MapBaProblem& ba, Map* map, std::set<KeyframeId>* changed_keyframes,
-                 std::set<PointId>* changed_points) {
+int writeBackBa(const MapBaProblem& ba, Map* map, std::set<KeyframeId>* changed_keyframes,
+                std::set<PointId>* changed_points) {
+  int written = 0;
   for (const BaKeyframe& k : ba.problem.keyframes) {
     if (k.fixed) continue;
     if (Keyframe* kf = map->keyframe(k.id)) {
       kf->T_w_c = k.T_w_c;
       changed_keyframes->insert(k.id);
+      ++written;
     }
   }
   for (const BaPoint& p : ba.problem.points) {
@@ -80,8 +82,10 @@ void writeBackBa(const MapBaProblem& ba, Map* map, std::set<KeyframeId>* changed
     if (MapPoint* point = map->point(p.id)) {
       point->p_w = p.p_w;
       changed_points->insert(p.id);
+      ++written;
     }
   }
+  return written;
 }
 
 int applyBaOutliers(const MapBaProblem& ba, const BaResult& result, Map* map,

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <deque>
 #include <set>
+#include <utility>
 
 #include "rgbdslam/mapping/ba_problem.h"
 #include "rgbdslam/mapping/data_association.h"
@@ -61,9 +62,6 @@ void MapperOptions::bind(OptionRegistry* r) {
 const char* toString(MapperResult::Status status) {
   switch (status) {
     case MapperResult::Status::kIntegrated: return "integrated";
-    case MapperResult::Status::kDuplicate: return "duplicate";
-    case MapperResult::Status::kOutOfOrder: return "out_of_order";
-    case MapperResult::Status::kForeignMap: return "foreign_map";
     case MapperResult::Status::kBadKeyframe: return "bad_keyframe";
   }
   return "?";
@@ -106,10 +104,9 @@ class Mapper::Impl {
       : camera_(camera), options_(options), mode_(mode), adjuster_(baOptions(options, mode)) {}
 
   MapperResult addKeyframe(const KeyframeData& data, const std::atomic<bool>* interrupt);
-  std::optional<MapUpdate> refine(const std::atomic<bool>* interrupt);
-  MapUpdate snapshot() const;
+  bool refine(const std::atomic<bool>* interrupt);
+  MapChanges takeChanges() { return std::exchange(changes_, MapChanges{}); }
   const Map& map() const { return map_; }
-  int64_t version() const { return version_; }
 
  private:
   static BaOptions baOptions(const MapperOptions& options, SlamMode mode) {
@@ -131,32 +128,23 @@ class Mapper::Impl {
   bool refindNewPoints(const std::atomic<bool>* interrupt);
   void cull();
   std::set<KeyframeId> recentKeyframes() const;
-  std::vector<KeyframeId> ackList() const;
-  MapUpdate acknowledgement() const;
-  MapUpdate takeDelta();
-  bool hasChanges() const {
-    return !changed_keyframes_.empty() || !changed_points_.empty() || !removed_points_.empty();
-  }
 
   PinholeCamera camera_;
   MapperOptions options_;
   SlamMode mode_;
   BundleAdjuster adjuster_;
   Map map_;
-  std::optional<int64_t> map_id_;
-  KeyframeId next_id_ = 0;
-  int64_t version_ = 0;
-  int64_t utime_ = 0;
   std::deque<PointId> refind_queue_;  // new points not yet searched in the other keyframes
   std::set<std::pair<PointId, KeyframeId>> pending_outliers_;  // 2-D outliers to remove
   bool global_ba_needed_ = false;
   bool cull_needed_ = false;
   int keyframes_since_global_ba_ = 0;
-  std::set<KeyframeId> changed_keyframes_;  // since the last published delta
-  std::set<PointId> changed_points_, removed_points_;
+  MapChanges changes_;  // since the last takeChanges()
+  bool changed_in_call_ = false;  // refine(): this call changed the map
 };
 
 std::string Mapper::Impl::checkKeyframe(const KeyframeData& data) const {
+  if (map_.hasKeyframe(data.id)) return "keyframe " + std::to_string(data.id) + " is already in the map";
   if (data.grey.empty() || data.grey.type() != CV_8UC1) return "grey image missing or not CV_8UC1";
   if (data.grey.cols != camera_.width || data.grey.rows != camera_.height) return "image size differs from the camera's";
   if (!data.depth.empty() && (data.depth.type() != CV_16UC1 || data.depth.size() != data.grey.size())) {
@@ -167,17 +155,6 @@ std::string Mapper::Impl::checkKeyframe(const KeyframeData& data) const {
 
 MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atomic<bool>* interrupt) {
   MapperResult result;
-  if (map_id_ && data.map_id != *map_id_) {
-    result.status = MapperResult::Status::kForeignMap;
-    result.error = "keyframe of map " + std::to_string(data.map_id) + ", the mapper holds map " +
-                   std::to_string(*map_id_);
-    return result;
-  }
-  if (data.id < next_id_ || data.id > next_id_) {
-    result.status = data.id < next_id_ ? MapperResult::Status::kDuplicate : MapperResult::Status::kOutOfOrder;
-    result.update = acknowledgement();
-    return result;
-  }
   result.error = checkKeyframe(data);
   if (!result.error.empty()) {
     result.status = MapperResult::Status::kBadKeyframe;
@@ -191,11 +168,10 @@ MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atom
   runBa(localWindow(kf), interrupt);
   result.local_ba_ms = msSince(ba_start);
   updateMedianDepth(map_, map_.keyframe(data.id));
-  changed_keyframes_.insert(data.id);
+  changes_.keyframes.insert(data.id);
   global_ba_needed_ = global_ba_needed_ || ++keyframes_since_global_ba_ >= options_.global_ba_every;
   cull_needed_ = true;
   result.status = MapperResult::Status::kIntegrated;
-  result.update = takeDelta();
   return result;
 }
 
@@ -204,9 +180,6 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = data.T_w_c;
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
   Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, options_.keyframe_build));
-  map_id_ = data.map_id;
-  next_id_ = data.id + 1;
-  utime_ = data.utime;
   for (const MapPointData& p : data.new_points) {
     MapPoint point;
     point.id = p.id, point.p_w = p.p_w, point.source_keyframe = p.source_keyframe;
@@ -229,8 +202,8 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
 
 void Mapper::Impl::addPoint(const MapPoint& point) {
   map_.addPoint(point);
-  changed_points_.insert(point.id);
-  removed_points_.erase(point.id);
+  changes_.points.insert(point.id);
+  changes_.removed_points.erase(point.id);
   refind_queue_.push_back(point.id);
 }
 
@@ -356,7 +329,7 @@ BaResult Mapper::Impl::runBa(const std::set<KeyframeId>& free_keyframes, const s
                                    fix_initial_points);
   BaResult result = adjuster_.solve(&ba.problem, interrupt);
   if (!usableResult(result)) return result;
-  writeBackBa(ba, &map_, &changed_keyframes_, &changed_points_);
+  if (writeBackBa(ba, &map_, &changes_.keyframes, &changes_.points) > 0) changed_in_call_ = true;
   applyBaOutliers(ba, result, &map_, &pending_outliers_);
   cull_needed_ = true;
   return result;
@@ -399,15 +372,17 @@ void Mapper::Impl::cull() {
   const CullOptions co{options_.min_good_measurements, options_.max_outlier_fraction};
   const CullResult culled = cullMap(&map_, &pending_outliers_, recentKeyframes(), co);
   for (PointId pid : culled.removed_points) {
-    removed_points_.insert(pid);
-    changed_points_.erase(pid);
+    changes_.removed_points.insert(pid);
+    changes_.points.erase(pid);
+    changed_in_call_ = true;
   }
   if (!culled.removed_points.empty() || culled.removed_measurements > 0) global_ba_needed_ = true;
   cull_needed_ = false;
 }
 
-std::optional<MapUpdate> Mapper::Impl::refine(const std::atomic<bool>* interrupt) {
-  if (map_.numKeyframes() == 0) return std::nullopt;
+bool Mapper::Impl::refine(const std::atomic<bool>* interrupt) {
+  if (map_.numKeyframes() == 0) return false;
+  changed_in_call_ = false;
   if (!refind_queue_.empty() && refindNewPoints(interrupt)) global_ba_needed_ = true;
   if (global_ba_needed_ && !interrupted(interrupt)) {
     const BaResult r = runBa(globalWindow(), interrupt);
@@ -418,47 +393,7 @@ std::optional<MapUpdate> Mapper::Impl::refine(const std::atomic<bool>* interrupt
     }
   }
   if (cull_needed_ && !interrupted(interrupt)) cull();
-  if (!hasChanges()) return std::nullopt;
-  return takeDelta();
-}
-
-std::vector<KeyframeId> Mapper::Impl::ackList() const {
-  std::vector<KeyframeId> ids;
-  for (const auto& [id, kf] : map_.keyframes()) ids.push_back(id);
-  return ids;
-}
-
-MapUpdate Mapper::Impl::acknowledgement() const {
-  MapUpdate u;
-  u.utime = utime_;
-  u.map_id = map_id_.value_or(0);
-  u.version = version_;
-  u.acked_keyframes = ackList();
-  return u;
-}
-
-MapUpdate Mapper::Impl::takeDelta() {
-  MapUpdate u = acknowledgement();
-  u.version = ++version_;
-  for (KeyframeId id : changed_keyframes_) {
-    if (const Keyframe* kf = map_.keyframe(id)) u.keyframes.push_back({id, kf->T_w_c});
-  }
-  for (PointId id : changed_points_) {
-    if (const MapPoint* p = map_.point(id)) u.points.push_back(p->data());
-  }
-  u.removed_points.assign(removed_points_.begin(), removed_points_.end());
-  changed_keyframes_.clear();
-  changed_points_.clear();
-  removed_points_.clear();
-  return u;
-}
-
-MapUpdate Mapper::Impl::snapshot() const {
-  MapUpdate u = acknowledgement();
-  u.is_snapshot = true;
-  for (const auto& [id, kf] : map_.keyframes()) u.keyframes.push_back({id, kf->T_w_c});
-  for (PointId id : sortedPointIds(map_)) u.points.push_back(map_.point(id)->data());
-  return u;
+  return changed_in_call_;
 }
 
 Mapper::Mapper(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode)
@@ -467,9 +402,8 @@ Mapper::~Mapper() = default;
 MapperResult Mapper::addKeyframe(const KeyframeData& keyframe, const std::atomic<bool>* interrupt) {
   return impl_->addKeyframe(keyframe, interrupt);
 }
-std::optional<MapUpdate> Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(interrupt); }
-MapUpdate Mapper::snapshot() const { return impl_->snapshot(); }
+bool Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(interrupt); }
+MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
-int64_t Mapper::version() const { return impl_->version(); }
 
 }  // namespace rgbdslam

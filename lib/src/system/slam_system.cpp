@@ -1,10 +1,13 @@
 #include "rgbdslam/system/slam_system.h"
 
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <mutex>
-#include <random>
 #include <thread>
+
+#include "rgbdslam/sync/mapper_sync.h"
+#include "rgbdslam/sync/tracker_sync.h"
 
 namespace rgbdslam {
 
@@ -17,44 +20,68 @@ void SlamOptions::bind(OptionRegistry* registry) {
                  "concurrent mode: keyframes waiting for the mapper at most");
   tracker.bind(registry);
   mapper.bind(registry);
+  sync.bind(registry);
 }
+
+namespace {
+
+constexpr int64_t kMapId = 1;  // one process, one map
+constexpr auto kWorkerTick = std::chrono::milliseconds(20);  // idle mapper: publication checks
+
+int64_t steadyNowUs() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace
 
 class SlamSystem::Impl {
  public:
-  Impl(const PinholeCamera& camera, const SlamOptions& options, bool deterministic)
+  Impl(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
+       const LinkOptions& link)
       : options_(options), mode_(*parseSlamMode(options.mode)), deterministic_(deterministic),
-        tracker_(camera, options.tracker, mode_, /*map_id=*/1),
-        mapper_(camera, options.mapper, mode_) {
+        tracker_(camera, options.tracker, mode_, kMapId),
+        tracker_sync_(kMapId, options.sync.outbox),
+        mapper_(camera, options.mapper, mode_),
+        mapper_sync_(&mapper_, mapperSyncOptions(options.sync.mapper, link)),
+        keyframe_link_(link), map_link_(withSeed(link, 2)), receipt_link_(withSeed(link, 3)) {
     if (!deterministic_) worker_ = std::thread([this] { mapperLoop(); });
   }
 
   ~Impl() { finish(); }
 
   TrackResult process(const RgbdFrame& frame) {
-    applyPendingUpdates();
+    const int64_t now_us = clock(frame);
+    receiveMaps(now_us);
     TrackResult result = tracker_.track(frame);
     ++stats_.frames;
     if (result.status == TrackResult::Status::kLost) ++stats_.lost_frames;
     if (result.status == TrackResult::Status::kBadFrame) ++stats_.bad_frames;
     if (result.new_keyframe) {
       ++stats_.keyframes;
-      if (deterministic_) integrateNow(*result.new_keyframe);
-      else enqueue(*result.new_keyframe);
+      sendKeyframe(*result.new_keyframe, now_us);
+      tracker_sync_.send(result.new_keyframe->id, *result.new_keyframe, now_us);  // shares the images
     }
+    for (const KeyframeData* again : tracker_sync_.resendsDue(now_us)) sendKeyframe(*again, now_us);
+    if (now_us - last_receipt_us_ >= static_cast<int64_t>(options_.sync.receipt_period_s * 1e6)) {
+      last_receipt_us_ = now_us;
+      sendReceipt(tracker_sync_.receipt(now_us), now_us);
+    }
+    if (deterministic_) runMapper(now_us);
     return result;
   }
 
   void finish() {
     if (worker_.joinable()) {
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stopping_ = true;
-      }
-      wake_.notify_all();
+      finishing_ = true;
       worker_.join();
-      applyPendingUpdates();
+      receiveMaps(steadyNowUs());
     }
     stats_.points = static_cast<long>(mapper_.map().numPoints());
+    const auto counters = mapper_sync_.counters();
+    stats_.snapshots = counters.snapshots_published;
+    stats_.link_lost = keyframe_link_.lost() + map_link_.lost() + receipt_link_.lost();
   }
 
   const Mapper& mapper() const { return mapper_; }
@@ -62,94 +89,128 @@ class SlamSystem::Impl {
   SlamStats stats() const { return stats_; }
 
  private:
-  void integrateNow(const KeyframeData& keyframe) {
-    MapperResult added = mapper_.addKeyframe(keyframe);
-    apply(added.update);
-    for (int i = 0; i < options_.max_refine_steps; ++i) {
-      std::optional<MapUpdate> update = mapper_.refine();
-      if (!update) break;
-      apply(*update);
+  // Over a perfect in-process link every change goes to the tracker at once.
+  static MapperSyncOptions mapperSyncOptions(MapperSyncOptions options, const LinkOptions& link) {
+    if (link.imperfect()) return options;
+    options.publisher.map_period_s = 0.0;
+    options.publisher.diff = MapDiffOptions{0.0, 0.0, 0.0};
+    return options;
+  }
+
+  static LinkOptions withSeed(LinkOptions link, uint32_t offset) {
+    link.seed += offset;  // each direction its own random stream
+    return link;
+  }
+
+  int64_t clock(const RgbdFrame& frame) {
+    if (!deterministic_) return steadyNowUs();
+    sequence_now_us_ = std::max(sequence_now_us_, frame.utime);  // never backwards
+    return sequence_now_us_;
+  }
+
+  // The tracker's end.
+  void sendKeyframe(const KeyframeData& keyframe, int64_t now_us) {
+    ++stats_.keyframe_sends;
+    if (deterministic_) {
+      keyframe_link_.send(keyframe, now_us);
+      return;
     }
-  }
-
-  void apply(const MapUpdate& update) {
-    tracker_.applyMapUpdate(update);
-    ++stats_.map_updates;
-  }
-
-  // Concurrent mode: the tracker side.
-  void enqueue(const KeyframeData& keyframe) {
     {
+      // Back-pressure: a mapper far behind makes the tracker wait rather than drop keyframes.
       std::unique_lock<std::mutex> lock(mutex_);
-      // A full queue means the mapper is far behind: wait for it rather than drop a keyframe
-      // (the map must not lose keyframes the tracker already built points on).
-      space_.wait(lock, [this] { return static_cast<int>(queue_.size()) < options_.keyframe_queue_length; });
-      queue_.push_back(keyframe);
+      while (static_cast<int>(mapper_sync_.queueLength()) >= options_.keyframe_queue_length) {
+        space_.wait_for(lock, kWorkerTick);
+      }
     }
-    interrupt_ = true;
-    wake_.notify_all();
+    mapper_sync_.offer(IncomingKeyframe{keyframe, {}});
   }
 
-  void applyPendingUpdates() {
-    std::deque<MapUpdate> updates;
-    {
+  void sendReceipt(const MapReceipt& receipt, int64_t now_us) {
+    if (deterministic_) receipt_link_.send(receipt, now_us);
+    else mapper_sync_.onReceipt(receipt);
+  }
+
+  void receiveMaps(int64_t now_us) {
+    std::vector<MapUpdate> updates;
+    if (deterministic_) {
+      updates = map_link_.receive(now_us);
+    } else {
       std::lock_guard<std::mutex> lock(mutex_);
-      updates.swap(updates_);
+      updates.assign(std::make_move_iterator(published_.begin()), std::make_move_iterator(published_.end()));
+      published_.clear();
     }
-    for (const auto& update : updates) apply(update);
-  }
-
-  // Concurrent mode: the mapper thread. Integrates queued keyframes first, refines otherwise.
-  void mapperLoop() {
-    bool idle = false;
-    for (;;) {
-      std::optional<KeyframeData> keyframe;
-      {
-        std::unique_lock<std::mutex> lock(mutex_);
-        wake_.wait(lock, [&] { return stopping_ || !queue_.empty() || !idle; });
-        if (!queue_.empty()) {
-          keyframe = std::move(queue_.front());
-          queue_.pop_front();
-          interrupt_ = !queue_.empty();
-        } else if (stopping_ && idle) {
-          return;
-        }
-      }
-      space_.notify_all();
-      if (keyframe) {
-        publish(mapper_.addKeyframe(*keyframe, &interrupt_).update);
-        idle = false;
-        continue;
-      }
-      std::optional<MapUpdate> update = mapper_.refine(&interrupt_);
-      if (update) publish(*update);
-      idle = !update;
+    for (const MapUpdate& update : updates) {
+      const MapReceiveResult r = tracker_sync_.receive(
+          update, now_us, [this](const MapUpdate& u) { return tracker_.applyMap(u); });
+      if (r.applied) ++stats_.maps_applied;
+      if (r.verdict == MapVerdict::kMissingDelta) ++stats_.maps_missing_delta;
+      if (r.verdict == MapVerdict::kStale) ++stats_.maps_stale;
     }
   }
 
-  void publish(const MapUpdate& update) {
+  // The mapper's end, deterministic: everything due, then refinement to convergence.
+  void runMapper(int64_t now_us) {
+    for (KeyframeData& keyframe : keyframe_link_.receive(now_us)) {
+      mapper_sync_.offer(IncomingKeyframe{std::move(keyframe), {}});
+    }
+    for (const MapReceipt& receipt : receipt_link_.receive(now_us)) mapper_sync_.onReceipt(receipt);
+    while (mapper_sync_.integrateNext()) publishDue(now_us);
+    for (int i = 0; i < options_.max_refine_steps && mapper_sync_.refine(); ++i) publishDue(now_us);
+    publishDue(now_us);
+  }
+
+  void publishDue(int64_t now_us) {
+    std::optional<MapUpdate> update = mapper_sync_.publishDue(now_us);
+    if (!update) return;
+    if (deterministic_) {
+      map_link_.send(*update, now_us);
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
-    updates_.push_back(update);
+    published_.push_back(std::move(*update));
+  }
+
+  // The mapper's end, concurrent: integrate what is next, else refine, else wait.
+  void mapperLoop() {
+    for (;;) {
+      const bool work = mapper_sync_.waitForWork(kWorkerTick);
+      if (!work && finishing_) break;
+      if (mapper_sync_.integrateNext()) {
+        { std::lock_guard<std::mutex> lock(mutex_); }  // the tracker waits or sees the queue
+        space_.notify_all();
+      } else {
+        mapper_sync_.refine();
+      }
+      publishDue(steadyNowUs());
+    }
   }
 
   SlamOptions options_;
   SlamMode mode_;
   bool deterministic_;
   Tracker tracker_;
+  TrackerSync<KeyframeData> tracker_sync_;
   Mapper mapper_;
+  MapperSync mapper_sync_;
+  // Deterministic mode's link, one per direction and kind.
+  MemoryLink<KeyframeData> keyframe_link_;
+  MemoryLink<MapUpdate> map_link_;
+  MemoryLink<MapReceipt> receipt_link_;
+  int64_t sequence_now_us_ = 0;
+  int64_t last_receipt_us_ = 0;
   SlamStats stats_;
 
+  // Concurrent mode.
   std::mutex mutex_;
-  std::condition_variable wake_, space_;
-  std::deque<KeyframeData> queue_;   // guarded by mutex_
-  std::deque<MapUpdate> updates_;    // guarded by mutex_
-  bool stopping_ = false;            // guarded by mutex_
-  std::atomic<bool> interrupt_{false};
+  std::condition_variable space_;
+  std::deque<MapUpdate> published_;  // guarded by mutex_
+  std::atomic<bool> finishing_{false};
   std::thread worker_;
 };
 
-SlamSystem::SlamSystem(const PinholeCamera& camera, const SlamOptions& options, bool deterministic)
-    : impl_(std::make_unique<Impl>(camera, options, deterministic)) {}
+SlamSystem::SlamSystem(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
+                       const LinkOptions& link)
+    : impl_(std::make_unique<Impl>(camera, options, deterministic, link)) {}
 SlamSystem::~SlamSystem() = default;
 TrackResult SlamSystem::process(const RgbdFrame& frame) { return impl_->process(frame); }
 void SlamSystem::finish() { impl_->finish(); }

@@ -11,6 +11,7 @@
 #include "rgbdslam/image/corners.h"
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
+#include "rgbdslam/tracking/map_replica.h"
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/tracking/pose_optimizer.h"
 #include "rgbdslam/tracking/relocaliser.h"
@@ -61,7 +62,7 @@ class Tracker::Impl {
  public:
   Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
       : camera_(camera), options_(options), mode_(mode), map_id_(map_id),
-        rng_(static_cast<uint32_t>(options.random_seed)) {}
+        rng_(static_cast<uint32_t>(options.random_seed)), replica_(camera) {}
 
   TrackResult track(const RgbdFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
@@ -74,16 +75,11 @@ class Tracker::Impl {
     return result;
   }
 
-  UpdateStatus applyMapUpdate(const MapUpdate& update);
-  const Map& map() const { return map_; }
-  int64_t mapVersion() const { return version_; }
+  bool applyMap(const MapUpdate& update) { return replica_.apply(update); }
+  const Map& map() const { return replica_.map(); }
 
   void reset() {
-    map_ = Map();
-    slots_.clear();
-    slot_index_.clear();
-    acked_.clear();
-    version_ = 0;
+    replica_.clear();
     state_ = TrackingState::kInitialising;
     T_c_w_ = SE3();
     velocity_.setZero();
@@ -126,8 +122,6 @@ class Tracker::Impl {
                            std::vector<Measurement> measurements);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
   double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
-  void addSlot(MapPoint* point);
-  void removeSlot(PointId id);
   PoseOptimizerOptions poseOptions() const;
   bool depthInPose() const { return options_.use_depth_in_pose && depthInTracking(mode_); }
 
@@ -137,12 +131,8 @@ class Tracker::Impl {
   int64_t map_id_;
   std::mt19937 rng_;
 
-  // The replica and the tracker's per-point data.
-  Map map_;
-  int64_t version_ = 0;
-  std::unordered_set<KeyframeId> acked_;
-  std::vector<PointSlot> slots_;
-  std::unordered_map<PointId, size_t> slot_index_;
+  // The replica and the tracker's per-point search slots.
+  MapReplica replica_;
 
   // Motion state.
   TrackingState state_ = TrackingState::kInitialising;
@@ -189,7 +179,7 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   }
   prepareFrame(frame);
   TrackResult tracked;
-  if (map_.numKeyframes() == 0) tracked = initialise(frame);
+  if (replica_.map().numKeyframes() == 0) tracked = initialise(frame);
   else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
   else tracked = trackNormally(frame);
   std::swap(previous_sbi_, sbi_);
@@ -236,11 +226,10 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
                    " points do not fix the pose)";
     return result;
   }
-  map_.addKeyframe(std::move(keyframe));
+  replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (np.point.id >= kProvisionalPointsPerKeyframe) break;
-    addSlot(map_.addPoint(np.point));
-    map_.addMeasurement(0, np.measurement);
+    replica_.addProvisionalPoint(0, np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
   }
@@ -303,7 +292,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   std::vector<RelocalisationCandidate> candidates =
-      relocalisationCandidates(map_, sbi_, camera_, options_.relocalise_candidates);
+      relocalisationCandidates(replica_.map(), sbi_, camera_, options_.relocalise_candidates);
   // The last good pose first: after a short disturbance the camera is often still near it.
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
   for (const RelocalisationCandidate& candidate : candidates) {
@@ -340,7 +329,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
 // puts them.
 bool Tracker::Impl::coarseWanted(const SE3& T_c_w_start) {
   if (options_.coarse_min_motion_px <= 0.0 || visible_.empty()) return true;
-  if (map_.numKeyframes() == 0) return true;
+  if (replica_.map().numKeyframes() == 0) return true;
   const SE3 T_last_start = T_c_w_ * T_c_w_start.inverse();
   displacements_.clear();
   for (const PointSlot* slot : visible_) {
@@ -406,7 +395,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
       options_.keyframe_angle_deg, options_.keyframe_few_points,
       options_.keyframe_few_points_min_frames, options_.keyframe_few_points_mono,
       options_.keyframe_few_points_mono_min_frames};
-  if (shouldAddKeyframe(map_, input, policy)) {
+  if (shouldAddKeyframe(replica_.map(), input, policy)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
   return result;
@@ -433,7 +422,7 @@ Attempt Tracker::Impl::betterOf(const Attempt& attempt, const SE3& start, const 
 }
 
 void Tracker::Impl::restoreOutcome(const std::vector<SlotOutcome>& outcome) {
-  for (PointSlot& slot : slots_) slot.searched = slot.found = false;
+  for (PointSlot& slot : replica_.slots()) slot.searched = slot.found = false;
   stage_.clear();
   for (const SlotOutcome& o : outcome) {
     o.slot->searched = o.searched;
@@ -445,7 +434,7 @@ void Tracker::Impl::restoreOutcome(const std::vector<SlotOutcome>& outcome) {
 }
 
 Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame, Coarse coarse) {
-  for (PointSlot& slot : slots_) slot.searched = slot.found = false;
+  for (PointSlot& slot : replica_.slots()) slot.searched = slot.found = false;
   SE3 T_c_w = T_c_w_start;
   projectAll(T_c_w);
   stage_.clear();
@@ -490,10 +479,10 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
 }
 
 void Tracker::Impl::projectAll(const SE3& T_c_w) {
-  makeKeyframeViews(map_, T_c_w, &views_);
+  makeKeyframeViews(replica_.map(), T_c_w, &views_);
   const ProjectionOptions projection{options_.image_margin_px};
   visible_.clear();
-  for (PointSlot& slot : slots_) {
+  for (PointSlot& slot : replica_.slots()) {
     if (projectPoint(camera_, T_c_w, views_, projection, &slot)) visible_.push_back(&slot);
   }
 }
@@ -592,101 +581,15 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
                                    data.id * kPointsPerKeyframe);
   }
-  map_.addKeyframe(std::move(keyframe));
+  replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (np.point.id - data.id * kPointsPerKeyframe >= kProvisionalPointsPerKeyframe) break;
-    addSlot(map_.addPoint(np.point));
-    map_.addMeasurement(data.id, np.measurement);
+    replica_.addProvisionalPoint(data.id, np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
   }
   frames_since_keyframe_ = 0;
   return data;
-}
-
-// ---------------------------------------------------------------------------------------
-// The replica
-
-// Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists.
-void Tracker::Impl::addSlot(MapPoint* point) {
-  const auto it = slot_index_.find(point->id);
-  if (it != slot_index_.end()) {
-    if (!initSlot(map_, camera_, point, &slots_[it->second])) removeSlot(point->id);
-    return;
-  }
-  PointSlot slot;
-  if (!initSlot(map_, camera_, point, &slot)) return;
-  slot_index_[point->id] = slots_.size();
-  slots_.push_back(slot);
-}
-
-void Tracker::Impl::removeSlot(PointId id) {
-  const auto it = slot_index_.find(id);
-  if (it == slot_index_.end()) return;
-  const size_t index = it->second;
-  slot_index_.erase(it);
-  if (index + 1 != slots_.size()) {
-    slots_[index] = slots_.back();
-    slot_index_[slots_[index].point->id] = index;
-  }
-  slots_.pop_back();
-}
-
-Tracker::UpdateStatus Tracker::Impl::applyMapUpdate(const MapUpdate& update) {
-  if (update.map_id != map_id_) return UpdateStatus::kForeignMap;
-  if (update.version <= version_) return UpdateStatus::kStale;
-  if (!update.is_snapshot && update.version != version_ + 1) return UpdateStatus::kMissingDelta;
-  bool unknown = false;
-  for (KeyframeId id : update.acked_keyframes) acked_.insert(id);
-  for (const KeyframePose& pose : update.keyframes) {
-    Keyframe* keyframe = map_.keyframe(pose.id);
-    if (keyframe) keyframe->T_w_c = pose.T_w_c;
-    else unknown = true;
-  }
-  if (update.is_snapshot) {
-    // Points of acknowledged keyframes that the snapshot no longer has were removed by the
-    // mapper; provisional points of keyframes it has not integrated yet stay.
-    std::unordered_set<PointId> kept;
-    for (const MapPointData& p : update.points) kept.insert(p.id);
-    std::vector<PointId> gone;
-    for (const auto& [id, point] : map_.points()) {
-      if (!kept.count(id) && acked_.count(point.source_keyframe)) gone.push_back(id);
-    }
-    for (PointId id : gone) {
-      removeSlot(id);
-      map_.removePoint(id);
-    }
-  }
-  for (const MapPointData& p : update.points) {
-    if (!map_.hasKeyframe(p.source_keyframe)) {
-      unknown = true;
-      continue;
-    }
-    MapPoint point;
-    point.id = p.id;
-    point.p_w = p.p_w;
-    point.source_keyframe = p.source_keyframe;
-    point.source_level = p.level;
-    point.source_uv = p.uv;
-    const MapPoint* before = map_.point(p.id);
-    const bool same_patch = before && before->source_keyframe == p.source_keyframe &&
-                            before->source_level == p.level && before->source_uv == p.uv;
-    MapPoint* stored = map_.addPoint(point);
-    const auto it = slot_index_.find(p.id);
-    if (same_patch && it != slot_index_.end()) continue;  // slot and patch cache stay valid
-    addSlot(stored);
-  }
-  for (const PointPosition& moved : update.moved_points) {
-    MapPoint* point = map_.point(moved.id);
-    if (point) point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
-    else unknown = true;
-  }
-  for (PointId id : update.removed_points) {
-    removeSlot(id);
-    map_.removePoint(id);
-  }
-  version_ = update.version;
-  return unknown ? UpdateStatus::kUnknownKeyframe : UpdateStatus::kApplied;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -696,11 +599,8 @@ Tracker::Tracker(const PinholeCamera& camera, const TrackerOptions& options, Sla
     : impl_(std::make_unique<Impl>(camera, options, mode, map_id)) {}
 Tracker::~Tracker() = default;
 TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame); }
-Tracker::UpdateStatus Tracker::applyMapUpdate(const MapUpdate& update) {
-  return impl_->applyMapUpdate(update);
-}
+bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }
-int64_t Tracker::mapVersion() const { return impl_->mapVersion(); }
 void Tracker::reset() { impl_->reset(); }
 
 }  // namespace rgbdslam

@@ -1,16 +1,18 @@
 #pragma once
-// What the mapper publishes over a lossy, narrow link: the difference between its map and the
-// state it last published. A delta lists the keyframes whose pose moved by more than a
-// threshold since it was last published, the points that are new (in full), the points that
-// moved by more than a threshold (id and position only: a third of the bytes), and the ids
-// removed; a snapshot lists everything in full.
-// A point whose patch the mapper re-describes keeps its id and patch here (the mapper never
-// changes a point's source keyframe, level or pixel). Entries below the threshold are
-// not sent, and their baseline is kept, so slow drift accumulates until it crosses the
-// threshold (nothing is lost, only postponed). Versions and acknowledgements are the
-// caller's business (the process stamps them).
+// What the map publisher sends over a lossy, narrow link: the difference between the map and
+// the state it last published. A delta lists the keyframes whose pose moved by more than a
+// threshold since they were last published, the points that are new (in full), the points
+// that moved by more than a threshold (id and position only: a third of the bytes), and the
+// ids removed; a snapshot lists everything in full.
+// Deltas are built from the mapper's change reports (MapChanges), so their cost grows with
+// what changed, not with the map. An entry below its threshold is not sent and its baseline
+// (the value last published) is kept, so slow drift accumulates until it crosses the
+// threshold (nothing is lost, only postponed). A point never changes its patch (source
+// keyframe, level, pixel) once published. Versions and acknowledgements are the
+// publisher's business (sync/map_publisher.h).
 // Thresholds: 1 mm moves a point at 2 m by 0.26 px in a 525 px camera, below the tracker's
 // measurement noise; the same for keyframe centres, and 0.5 mrad for their orientation.
+// Memory: a baseline position per published point and pose per keyframe (grows with the map).
 #include <map>
 #include <unordered_map>
 
@@ -27,14 +29,12 @@ struct MapDiffOptions {
 class MapDiffer {
  public:
   explicit MapDiffer(const MapDiffOptions& options = {}) : options_(options) {}
-  // Changes since the last delta() or snapshot(); the returned update has is_snapshot false
-  // and no version, map id or acknowledgements. The baseline advances for what is returned.
-  MapUpdate delta(const Map& map);
+  // The entries of 'changes' that differ from the baseline by more than the thresholds, in
+  // id order; the returned update has is_snapshot false and no version, map id or
+  // acknowledgements. The baseline advances for what is returned.
+  MapUpdate delta(const Map& map, const MapChanges& changes);
   // The whole map; the baseline becomes the map.
   MapUpdate snapshot(const Map& map);
-  bool empty(const MapUpdate& update) const {
-    return update.keyframes.empty() && update.points.empty() && update.removed_points.empty();
-  }
 
  private:
   MapDiffOptions options_;

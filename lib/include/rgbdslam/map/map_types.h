@@ -4,6 +4,7 @@
 // ids k * kPointsPerKeyframe + i, so tracker and mapper name them alike without talking.
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <set>
 #include <vector>
 
 #include "rgbdslam/geometry/se3.h"
@@ -61,6 +62,27 @@ struct MapUpdate {
   std::vector<MapPointData> points;         // new or re-described points (all, in a snapshot)
   std::vector<PointPosition> moved_points;  // known points that only moved (patch unchanged)
   std::vector<PointId> removed_points;
+};
+
+// What changed in a map since it was last asked (Mapper::takeChanges): the map publisher
+// turns it into a delta. Ids only; the values are read from the map when published.
+struct MapChanges {
+  std::set<KeyframeId> keyframes;   // new, or pose changed
+  std::set<PointId> points;         // new, or position changed
+  std::set<PointId> removed_points; // culled (never in 'points' at the same time)
+  bool empty() const { return keyframes.empty() && points.empty() && removed_points.empty(); }
+  void merge(const MapChanges& later);
+};
+
+// The tracker's receipt for map versions (carried by map_receipt_t): which version of which
+// map it holds. The mapper's publisher reads it to find a tracker stuck behind a lost delta.
+struct MapReceipt {
+  int64_t utime = 0;                // time of the receipt [us]
+  int64_t map_id = 0;               // the tracker's map
+  int64_t applied_version = 0;      // newest version applied (0: none yet)
+  int64_t newest_version_seen = 0;  // newest version of this map received, applied or not
+  int64_t keyframes_created = 0;    // keyframe ids below this exist on the tracker
+  int64_t keyframes_unacked = 0;    // of those, not yet acknowledged
 };
 
 }  // namespace rgbdslam

@@ -26,8 +26,9 @@ MapBaProblem buildBaProblem(const Map& map, const PinholeCamera& camera,
                             bool fix_initial_points);
 
 // Writes the free poses and points back into the map; adds their ids to the change sets.
-void writeBackBa(const MapBaProblem& ba, Map* map, std::set<KeyframeId>* changed_keyframes,
-                 std::set<PointId>* changed_points);
+// Returns how many poses and points it wrote.
+int writeBackBa(const MapBaProblem& ba, Map* map, std::set<KeyframeId>* changed_keyframes,
+                std::set<PointId>* changed_points);
 
 // Applies the outlier flags: a 2-D outlier is added to *pending_2d_outliers (point id,
 // keyframe id) for removal at culling, a 2-D inlier is taken out of it, and a depth outlier

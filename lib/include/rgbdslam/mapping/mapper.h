@@ -1,23 +1,23 @@
 #pragma once
 // PTAM's mapper with depth (paper II-B, III-C, IV). It owns the authoritative map.
-//   addKeyframe(kf): integrate keyframes in id order, starting at id 0 (earlier duplicates
-//   are acknowledged again, gaps wait, keyframes of another map_id are refused): add the
-//   keyframe, its measurements of existing points and its provisional points from depth
-//   (measurements of unknown points are dropped and counted); for corners without depth
-//   (every corner in mono mode) add points by epipolar search against a partner keyframe
-//   (the nearest, or a farther one for parallax: epipolar_partner_distance_ratio; in mono
-//   then also the nearest others, epipolar_partners_mono)
-//   (epipolar_search.h); run local bundle adjustment (the new keyframe and its nearest
-//   neighbours free, the other keyframes that see their points fixed, keyframe 0 always
-//   fixed). Returns the map delta (with the acknowledgement) to publish.
+//   addKeyframe(kf): integrate a keyframe (the caller, sync/mapper_sync.h, brings them in
+//   id order from keyframe 0 and filters duplicates and foreign maps): add the keyframe, its
+//   measurements of existing points and its provisional points from depth (measurements of
+//   unknown points are dropped and counted); for corners without depth (every corner in mono
+//   mode) add points by epipolar search against a partner keyframe (the nearest, or a
+//   farther one for parallax: epipolar_partner_distance_ratio; in mono then also the nearest
+//   others, epipolar_partners_mono) (epipolar_search.h); run local bundle adjustment (the new
+//   keyframe and its nearest neighbours free, the other keyframes that see their points
+//   fixed, keyframe 0 always fixed).
 //   refine(interrupt): the background work, one PTAM loop pass per call: re-find the newest
 //   points in the other keyframes (data_association.h), global bundle adjustment (all but
 //   keyframe 0; only the newest max_global_ba_keyframes free), then cull 2-D outlier
-//   measurements and points with too few good ones (map_maintenance.h). Returns a delta when
-//   the map changed, nullopt when there is nothing left to do (converged). Interrupted
+//   measurements and points with too few good ones (map_maintenance.h). Returns true when
+//   the map changed, false when there is nothing left to do (converged). Interrupted
 //   (returns early, keeping what was done) when *interrupt becomes true, i.e. a new
 //   keyframe arrived.
-//   snapshot(): the whole map as a full update (version unchanged).
+//   takeChanges(): the ids of keyframes and points changed or removed since the last call.
+//   The mapper versions nothing: the map publisher (sync/map_publisher.h) does.
 // Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
 // the next culling; a depth reading judged an outlier is dropped at once (depth set to 0),
 // keeping the 2-D measurement.
@@ -29,7 +29,7 @@
 // (i < kPointsPerKeyframe / 2); points the mapper creates for keyframe k use the upper half
 // of k's block, so both sides name points alike without talking.
 // Determinism: no randomness; everything iterates in id order, so equal inputs give equal
-// maps. MapUpdate::utime is the utime of the newest integrated keyframe.
+// maps.
 // Threads: not thread-safe; one thread calls everything (interrupt may be set by another).
 #include <atomic>
 #include <memory>
@@ -97,14 +97,11 @@ struct MapperOptions {
 
 struct MapperResult {
   enum class Status {
-    kIntegrated,   // the keyframe is in the map; update is the delta (version + 1)
-    kDuplicate,    // already integrated: update re-acknowledges (version unchanged, no content)
-    kOutOfOrder,   // an earlier keyframe is missing: re-send later (update as for kDuplicate)
-    kForeignMap,   // another map_id than the first keyframe's: refused (error says which)
-    kBadKeyframe,  // unusable content (no image, wrong size): refused (error says why)
+    kIntegrated,   // the keyframe is in the map
+    kBadKeyframe,  // unusable content (no image, wrong size, id already in the map):
+                   // refused (error says why)
   };
   Status status = Status::kBadKeyframe;
-  MapUpdate update;   // the delta to publish (acknowledges every keyframe integrated so far)
   std::string error;
   int dropped_measurements = 0;  // measurements of points the map does not know
   int epipolar_points = 0;       // points added by epipolar search
@@ -118,10 +115,9 @@ class Mapper {
   Mapper(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode);
   ~Mapper();
   MapperResult addKeyframe(const KeyframeData& keyframe, const std::atomic<bool>* interrupt = nullptr);
-  std::optional<MapUpdate> refine(const std::atomic<bool>* interrupt = nullptr);
-  MapUpdate snapshot() const;           // the whole map as a full snapshot
+  bool refine(const std::atomic<bool>* interrupt = nullptr);
+  MapChanges takeChanges();
   const Map& map() const;
-  int64_t version() const;
 
  private:
   class Impl;

@@ -12,8 +12,8 @@
 //   small blurry image with every keyframe's and tries the best. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
-//   applyMapUpdate(update): the mapper's newer map versions replace the replica's poses and
-//   points; older or foreign versions are ignored (the return value says why).
+//   applyMap(update): a map version's content goes into the replica (map_replica.h); which
+//   versions apply, in which order, is the map protocol's business (sync/tracker_sync.h).
 // Frames: T_w_c camera to world; pixels at level 0; depth in metres.
 #include <memory>
 #include <optional>
@@ -149,16 +149,10 @@ class Tracker {
   ~Tracker();
   TrackResult track(const RgbdFrame& frame);
 
-  // kApplied: applied. kStale: version <= mapVersion(), ignored. kForeignMap: another
-  // map_id, ignored. kUnknownKeyframe: applied, but it named keyframes (poses or point
-  // sources) the replica does not have; those entries were skipped. kMissingDelta: a delta
-  // whose version is not mapVersion() + 1 (an update in between was lost); ignored, because
-  // applying it would leave the replica a mix of versions -- the next snapshot repairs it.
-  enum class UpdateStatus { kApplied, kStale, kForeignMap, kUnknownKeyframe, kMissingDelta };
-  UpdateStatus applyMapUpdate(const MapUpdate& update);
+  // Returns false when entries named keyframes the replica lacks (they were skipped).
+  bool applyMap(const MapUpdate& update);
 
   const Map& map() const;
-  int64_t mapVersion() const;
   void reset();  // forget the map; the next frame initialises a new one
 
  private:

@@ -1,0 +1,89 @@
+#pragma once
+// The tracker's side of keyframe delivery (docs/design.md, "Map protocol"): every keyframe
+// the tracker creates is kept until a map message acknowledges it, and re-sent meanwhile.
+// A keyframe is first re-sent resend_period_s after it was sent, then at doubling intervals
+// up to resend_max_period_s (a slow or absent mapper is not flooded), at most resend_max at
+// one time, oldest first (the mapper integrates in id order, so it needs the oldest first).
+// 'Message' is what goes on the wire: the encoded keyframe_t in rgbd-tracker (encoding once,
+// re-sending the bytes), the KeyframeData itself in rgbd-slam.
+// Time: 'now_us' from the caller's monotonic clock [us]; the outbox reads no clock itself.
+// Memory: one Message per unacknowledged keyframe (during a link outage it grows by one per
+// keyframe; the mapper's intake bounds nothing here).
+// Threads: not thread-safe; one thread calls everything.
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "rgbdslam/map/map_types.h"
+
+namespace rgbdslam {
+
+struct KeyframeOutboxOptions {
+  double resend_period_s = 1.0;      // first re-send of an unacknowledged keyframe after this [s]
+  double resend_max_period_s = 4.0;  // the doubling re-send interval grows to this at most [s]
+  int resend_max = 2;                // keyframes re-sent at one time at most, oldest first
+};
+
+template <typename Message>
+class KeyframeOutbox {
+ public:
+  explicit KeyframeOutbox(const KeyframeOutboxOptions& options = {}) : options_(options) {}
+
+  // A keyframe the caller has just sent for the first time; kept until acknowledged.
+  void sent(KeyframeId id, Message message, int64_t now_us) {
+    Entry entry{std::move(message), now_us, now_us + toUs(options_.resend_period_s),
+                options_.resend_period_s, 1};
+    entries_[id] = std::move(entry);
+  }
+
+  // The keyframes to re-send now (oldest first, at most resend_max); each is rescheduled.
+  std::vector<const Message*> resendsDue(int64_t now_us) {
+    std::vector<const Message*> due;
+    for (auto& [id, entry] : entries_) {
+      if (static_cast<int>(due.size()) >= options_.resend_max) break;
+      if (now_us < entry.next_send_us) continue;
+      entry.interval_s = std::min(2 * entry.interval_s,
+                                  std::max(options_.resend_max_period_s, options_.resend_period_s));
+      entry.next_send_us = now_us + toUs(entry.interval_s);
+      ++entry.sends;
+      due.push_back(&entry.message);
+    }
+    return due;
+  }
+
+  // Drops every listed keyframe that is waiting; returns, for each one dropped, the time
+  // from its first send to now [s] (the acknowledgement latency).
+  std::vector<double> acknowledge(const std::vector<KeyframeId>& acked, int64_t now_us) {
+    std::vector<double> ages_s;
+    for (KeyframeId id : acked) {
+      const auto it = entries_.find(id);
+      if (it == entries_.end()) continue;
+      ages_s.push_back((now_us - it->second.first_sent_us) * 1e-6);
+      entries_.erase(it);
+    }
+    return ages_s;
+  }
+
+  size_t size() const { return entries_.size(); }
+  bool empty() const { return entries_.empty(); }
+  // Sends of a waiting keyframe so far (0 when it is not waiting).
+  int sends(KeyframeId id) const {
+    const auto it = entries_.find(id);
+    return it == entries_.end() ? 0 : it->second.sends;
+  }
+
+ private:
+  static int64_t toUs(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
+  struct Entry {
+    Message message;
+    int64_t first_sent_us = 0, next_send_us = 0;
+    double interval_s = 0.0;  // until the next re-send [s]
+    int sends = 0;
+  };
+  KeyframeOutboxOptions options_;
+  std::map<KeyframeId, Entry> entries_;  // ordered: oldest first
+};
+
+}  // namespace rgbdslam

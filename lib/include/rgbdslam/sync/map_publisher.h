@@ -1,0 +1,76 @@
+#pragma once
+// The one map publisher (docs/design.md, "Map protocol"): decides when the mapper's map goes
+// out, numbers the versions and builds each message.
+//   - A newly integrated keyframe is published at once (its acknowledgement stops the
+//     tracker's re-sends); refinement results at most every map_period_s.
+//   - Deltas carry what changed since the last publication, above the thresholds
+//     (map/map_diff.h); every message lists the integrated keyframes (the acknowledgement).
+//   - Snapshots (the whole map): the first publication after start() (a start or a restart
+//     from the journal), every snapshot_period_s as a fallback, and when the tracker's
+//     receipts show it stuck behind a lost delta: at once when a receipt shows a version
+//     seen but not applied (newer than the last snapshot), and when receipts in a row show
+//     the same applied version below the published one (the lost delta was the last): two
+//     receipts, or four while that version is below the last snapshot's (which may still be
+//     on its way).
+//   - A receipt that claims a version this publisher never published is counted and ignored.
+// Time: 'now_us' from the caller's monotonic clock [us]. Threads: not thread-safe (the
+// caller, MapperSync, serialises).
+#include <optional>
+
+#include "rgbdslam/map/map_diff.h"
+
+namespace rgbdslam {
+
+struct MapPublisherOptions {
+  double map_period_s = 1.0;        // refinement deltas at most this often [s]
+  double snapshot_period_s = 30.0;  // full snapshots at least this often [s]
+  MapDiffOptions diff;  // bound in section "sync" (sync_options.h)
+};
+
+enum class ReceiptVerdict {
+  kNoted,             // nothing to do
+  kSnapshotAsked,     // the next publication is a snapshot
+  kForeignMap,        // a receipt for another map
+  kImplausible,       // claims a version never published
+};
+const char* toString(ReceiptVerdict verdict);
+
+class MapPublisher {
+ public:
+  explicit MapPublisher(const MapPublisherOptions& options = {});
+  // Publishes map 'map_id' from version last_version + 1 on; the first is a snapshot.
+  void start(int64_t map_id, int64_t last_version);
+  // The mapper's changes since the last call; 'integrated': they include a new keyframe.
+  void note(const MapChanges& changes, bool integrated);
+  // A duplicate keyframe arrived (its acknowledgement was probably lost): acknowledge again
+  // with the next refinement publication.
+  void acknowledgementDue() { ack_due_ = true; }
+  ReceiptVerdict onReceipt(const MapReceipt& receipt);
+  // The next version when one is due at now_us (the baseline and the version advance);
+  // 'acked_below': keyframes with smaller ids are integrated.
+  std::optional<MapUpdate> publishDue(const Map& map, KeyframeId acked_below, int64_t now_us);
+
+  bool started() const { return map_id_ != 0; }
+  int64_t mapId() const { return map_id_; }
+  int64_t version() const { return version_; }
+  long snapshotsPublished() const { return snapshots_published_; }
+  long snapshotsAsked() const { return snapshots_asked_; }
+
+ private:
+  bool elapsed(int64_t since_us, int64_t now_us, double period_s) const {
+    return since_us < 0 || now_us - since_us >= static_cast<int64_t>(period_s * 1e6);
+  }
+  MapPublisherOptions options_;
+  MapDiffer differ_;
+  MapChanges pending_;                 // noted, not yet published
+  int64_t map_id_ = 0;                 // 0: not started
+  int64_t version_ = 0;                // last published
+  int64_t last_snapshot_version_ = 0;
+  int64_t last_publish_us_ = -1, last_snapshot_us_ = -1;
+  bool snapshot_due_ = true, integrated_unpublished_ = false, ack_due_ = false;
+  int64_t last_receipt_version_ = -1;  // applied version in the previous receipt
+  int same_receipts_ = 0;              // receipts in a row with that version
+  long snapshots_published_ = 0, snapshots_asked_ = 0;
+};
+
+}  // namespace rgbdslam

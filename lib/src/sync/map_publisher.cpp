@@ -1,0 +1,81 @@
+#include "rgbdslam/sync/map_publisher.h"
+
+namespace rgbdslam {
+
+const char* toString(ReceiptVerdict verdict) {
+  switch (verdict) {
+    case ReceiptVerdict::kNoted: return "noted";
+    case ReceiptVerdict::kSnapshotAsked: return "snapshot_asked";
+    case ReceiptVerdict::kForeignMap: return "foreign_map";
+    case ReceiptVerdict::kImplausible: return "implausible";
+  }
+  return "?";
+}
+
+MapPublisher::MapPublisher(const MapPublisherOptions& options)
+    : options_(options), differ_(options.diff) {}
+
+void MapPublisher::start(int64_t map_id, int64_t last_version) {
+  map_id_ = map_id;
+  version_ = last_version;
+  last_snapshot_version_ = last_version;
+  snapshot_due_ = true;
+  pending_ = MapChanges{};
+  last_receipt_version_ = -1;
+  same_receipts_ = 0;
+}
+
+void MapPublisher::note(const MapChanges& changes, bool integrated) {
+  pending_.merge(changes);
+  integrated_unpublished_ = integrated_unpublished_ || integrated;
+}
+
+ReceiptVerdict MapPublisher::onReceipt(const MapReceipt& receipt) {
+  if (!started() || receipt.map_id != map_id_) return ReceiptVerdict::kForeignMap;
+  if (receipt.applied_version > version_ || receipt.newest_version_seen > version_ ||
+      receipt.applied_version < 0) {
+    return ReceiptVerdict::kImplausible;
+  }
+  const bool holds_unapplied = receipt.newest_version_seen > receipt.applied_version &&
+                               receipt.newest_version_seen > last_snapshot_version_;
+  same_receipts_ = receipt.applied_version == last_receipt_version_ ? same_receipts_ + 1 : 1;
+  last_receipt_version_ = receipt.applied_version;
+  // Below the last snapshot, the snapshot may still be on its way (a large one over a slow
+  // link): give it two more receipt periods before asking again.
+  const int needed = receipt.applied_version >= last_snapshot_version_ ? 2 : 4;
+  const bool stuck = receipt.applied_version < version_ && same_receipts_ >= needed;
+  if (snapshot_due_ || !(holds_unapplied || stuck)) return ReceiptVerdict::kNoted;
+  snapshot_due_ = true;
+  ++snapshots_asked_;
+  return ReceiptVerdict::kSnapshotAsked;
+}
+
+std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId acked_below,
+                                                  int64_t now_us) {
+  if (!started()) return std::nullopt;
+  const bool snapshot = snapshot_due_ || elapsed(last_snapshot_us_, now_us, options_.snapshot_period_s);
+  const bool refinement_due = (!pending_.empty() || ack_due_) &&
+                              elapsed(last_publish_us_, now_us, options_.map_period_s);
+  if (!snapshot && !integrated_unpublished_ && !refinement_due) return std::nullopt;
+  MapUpdate update = snapshot ? differ_.snapshot(map) : differ_.delta(map, pending_);
+  update.utime = now_us;
+  update.map_id = map_id_;
+  update.version = ++version_;
+  update.is_snapshot = snapshot;
+  update.acked_keyframes.reserve(static_cast<size_t>(std::max<KeyframeId>(acked_below, 0)));
+  for (KeyframeId id = 0; id < acked_below; ++id) update.acked_keyframes.push_back(id);
+  pending_ = MapChanges{};
+  last_publish_us_ = now_us;
+  integrated_unpublished_ = ack_due_ = false;
+  if (snapshot) {
+    ++snapshots_published_;
+    last_snapshot_us_ = now_us;
+    last_snapshot_version_ = version_;
+    snapshot_due_ = false;
+    last_receipt_version_ = -1;  // judge the tracker again from its next receipts
+    same_receipts_ = 0;
+  }
+  return update;
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,190 @@
+#include "rgbdslam/sync/mapper_sync.h"
+
+namespace rgbdslam {
+
+const char* toString(IntakeVerdict verdict) {
+  switch (verdict) {
+    case IntakeVerdict::kQueued: return "queued";
+    case IntakeVerdict::kDuplicate: return "duplicate";
+    case IntakeVerdict::kForeignMap: return "foreign_map";
+    case IntakeVerdict::kQueueFull: return "queue_full";
+  }
+  return "?";
+}
+
+MapperSync::MapperSync(Mapper* mapper, const MapperSyncOptions& options, KeyframeJournal* journal)
+    : mapper_(mapper), options_(options), journal_(journal), publisher_(options.publisher) {}
+
+Status MapperSync::restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const IncomingKeyframe& incoming : journaled) {
+    const KeyframeData& kf = incoming.keyframe;
+    if (kf.id != next_id_ || (map_id_ != 0 && kf.map_id != map_id_)) {
+      return Error{"journaled keyframe " + std::to_string(kf.id) + " of map " +
+                   std::to_string(kf.map_id) + " does not follow keyframe " +
+                   std::to_string(next_id_ - 1) + " of map " + std::to_string(map_id_)};
+    }
+    const MapperResult result = mapper_->addKeyframe(kf);
+    if (result.status != MapperResult::Status::kIntegrated) {
+      return Error{"journaled keyframe " + std::to_string(kf.id) + " was not integrated: " +
+                   result.error};
+    }
+    map_id_ = kf.map_id;
+    next_id_ = kf.id + 1;
+    ++counters_.restored;
+  }
+  mapper_->takeChanges();  // the first publication is a snapshot anyway
+  if (map_id_ != 0) publisher_.start(map_id_, last_version);
+  converged_ = counters_.restored == 0;
+  return Status{};
+}
+
+IntakeVerdict MapperSync::offer(IncomingKeyframe incoming) {
+  const KeyframeData& kf = incoming.keyframe;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (kf.map_id <= 0 || (map_id_ != 0 && kf.map_id != map_id_)) {
+    ++counters_.foreign;
+    return IntakeVerdict::kForeignMap;
+  }
+  if (kf.id < next_id_ || queue_.count(kf.id)) {
+    ++counters_.duplicates;
+    publisher_.acknowledgementDue();  // the acknowledgement was probably lost
+    return IntakeVerdict::kDuplicate;
+  }
+  if (static_cast<int>(queue_.size()) >= options_.max_queued_keyframes) {
+    ++counters_.dropped_queue_full;
+    return IntakeVerdict::kQueueFull;
+  }
+  if (kf.id > next_id_) ++counters_.out_of_order;
+  ++counters_.queued;
+  const KeyframeId id = kf.id;
+  queue_[id] = std::move(incoming);
+  if (nextReadyLocked()) {
+    interrupt_ = true;
+    wake_.notify_all();
+  }
+  return IntakeVerdict::kQueued;
+}
+
+ReceiptVerdict MapperSync::onReceipt(const MapReceipt& receipt) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ReceiptVerdict verdict = publisher_.onReceipt(receipt);
+  if (verdict == ReceiptVerdict::kImplausible) ++counters_.receipts_implausible;
+  return verdict;
+}
+
+// Keyframes queued before the map had a name that are of another map.
+void MapperSync::dropForeignLocked() {
+  for (auto it = queue_.begin(); it != queue_.end();) {
+    if (it->second.keyframe.map_id == map_id_) {
+      ++it;
+      continue;
+    }
+    ++counters_.foreign;
+    it = queue_.erase(it);
+  }
+}
+
+std::optional<IntegrationStep> MapperSync::integrateNext() {
+  IncomingKeyframe incoming;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = queue_.find(next_id_);
+    if (it == queue_.end()) return std::nullopt;
+    incoming = std::move(it->second);
+    queue_.erase(it);
+    interrupt_ = false;
+  }
+  IntegrationStep step;
+  step.id = incoming.keyframe.id;
+  step.result = mapper_->addKeyframe(incoming.keyframe, &interrupt_);
+  if (step.result.status != MapperResult::Status::kIntegrated) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.refused;  // the tracker's re-sends bring it again; nothing else is lost
+    return step;
+  }
+  // Durable before it is acknowledged (by the next publication).
+  if (journal_) {
+    if (Status s = journal_->appendKeyframe(incoming); !s) step.journal_error = s.error();
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!step.journal_error.empty()) ++counters_.journal_errors;
+  if (map_id_ == 0) {
+    map_id_ = incoming.keyframe.map_id;
+    publisher_.start(map_id_, 0);
+    dropForeignLocked();
+  }
+  next_id_ = incoming.keyframe.id + 1;
+  ++counters_.integrated;
+  publisher_.note(mapper_->takeChanges(), /*integrated=*/true);
+  converged_ = false;
+  return step;
+}
+
+bool MapperSync::refine() {
+  if (converged_) return false;
+  const bool changed = mapper_->refine(&interrupt_);
+  converged_ = !changed && !interrupt_;
+  std::lock_guard<std::mutex> lock(mutex_);
+  publisher_.note(mapper_->takeChanges(), /*integrated=*/false);
+  return changed;
+}
+
+std::optional<MapUpdate> MapperSync::publishDue(int64_t now_us, std::string* journal_error) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<MapUpdate> update = publisher_.publishDue(mapper_->map(), next_id_, now_us);
+  if (!update) return update;
+  if (journal_) {
+    if (Status s = journal_->appendVersion(update->version); !s) {
+      ++counters_.journal_errors;
+      if (journal_error) *journal_error = s.error();
+    }
+  }
+  ++counters_.maps_published;
+  return update;
+}
+
+bool MapperSync::waitForWork(std::chrono::milliseconds timeout) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  wake_.wait_for(lock, timeout, [this] { return stopping_ || nextReadyLocked() || !converged_; });
+  return !stopping_ && (nextReadyLocked() || !converged_);
+}
+
+void MapperSync::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  interrupt_ = true;
+  wake_.notify_all();
+}
+
+MapperSync::Counters MapperSync::counters() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Counters c = counters_;
+  c.snapshots_published = publisher_.snapshotsPublished();
+  c.snapshots_asked = publisher_.snapshotsAsked();
+  return c;
+}
+
+int64_t MapperSync::mapId() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return map_id_;
+}
+
+int64_t MapperSync::version() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return publisher_.version();
+}
+
+size_t MapperSync::queueLength() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return queue_.size();
+}
+
+KeyframeId MapperSync::nextId() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return next_id_;
+}
+
+}  // namespace rgbdslam

@@ -1,0 +1,30 @@
+#include "rgbdslam/sync/sync_options.h"
+
+namespace rgbdslam {
+
+void SyncOptions::bind(OptionRegistry* r) {
+  const std::string s = "sync";
+  r->bind(s, "resend_period_s", &outbox.resend_period_s, 1e-3, 3600.0, "s",
+          "tracker: first re-send of an unacknowledged keyframe after this; the interval then doubles");
+  r->bind(s, "resend_max_period_s", &outbox.resend_max_period_s, 1e-3, 3600.0, "s",
+          "tracker: the re-send interval grows to this at most");
+  r->bind(s, "resend_max", &outbox.resend_max, 1, 1000, "keyframes",
+          "tracker: keyframes re-sent at one time at most, oldest first");
+  r->bind(s, "receipt_period_s", &receipt_period_s, 1e-3, 3600.0, "s",
+          "tracker: a map receipt (the version it holds) this often");
+  r->bind(s, "max_queued_keyframes", &mapper.max_queued_keyframes, 1, 100000, "keyframes",
+          "mapper: keyframes held waiting for an earlier one, at most (more are dropped and re-sent)");
+  MapPublisherOptions& p = mapper.publisher;
+  r->bind(s, "map_period_s", &p.map_period_s, 0.0, 3600.0, "s",
+          "mapper: refinement deltas at most this often (a newly integrated keyframe's at once)");
+  r->bind(s, "snapshot_period_s", &p.snapshot_period_s, 0.1, 86400.0, "s",
+          "mapper: full map snapshots at least this often (also when the tracker is stuck behind a lost delta)");
+  r->bind(s, "point_move_m", &p.diff.point_move_m, 0.0, 1.0, "m",
+          "mapper: a point that moved further than this since last published is sent again");
+  r->bind(s, "keyframe_move_m", &p.diff.keyframe_move_m, 0.0, 1.0, "m",
+          "mapper: a keyframe whose centre moved further than this since last published is sent again");
+  r->bind(s, "keyframe_turn_rad", &p.diff.keyframe_turn_rad, 0.0, 1.0, "rad",
+          "mapper: ...or whose orientation turned more than this");
+}
+
+}  // namespace rgbdslam

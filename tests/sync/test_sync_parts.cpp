@@ -1,0 +1,198 @@
+// The map protocol's parts one at a time: the tracker's outbox and follower, the mapper's
+// publisher and intake. The whole loop over a lossy link: test_sync_protocol.cpp.
+#include <gtest/gtest.h>
+
+#include "rgbdslam/sync/keyframe_outbox.h"
+#include "rgbdslam/sync/map_follower.h"
+#include "rgbdslam/sync/map_publisher.h"
+#include "rgbdslam/sync/memory_link.h"
+
+namespace rgbdslam {
+namespace {
+
+constexpr int64_t kS = 1000000;  // one second [us]
+
+TEST(SyncOutbox, ResendsWithDoublingIntervalOldestFirstUntilAcknowledged) {
+  KeyframeOutbox<int> outbox(KeyframeOutboxOptions{1.0, 4.0, 2});
+  outbox.sent(0, 100, 0);
+  outbox.sent(1, 101, 0);
+  outbox.sent(2, 102, 0);
+  EXPECT_TRUE(outbox.resendsDue(kS - 1).empty());
+  auto due = outbox.resendsDue(kS);  // at most two, oldest first
+  ASSERT_EQ(due.size(), 2u);
+  EXPECT_EQ(*due[0], 100);
+  EXPECT_EQ(*due[1], 101);
+  due = outbox.resendsDue(kS);  // keyframe 2 waited too
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_EQ(*due[0], 102);
+  EXPECT_TRUE(outbox.resendsDue(3 * kS - 1).empty());  // next after 2 s (doubled)
+  EXPECT_EQ(outbox.resendsDue(3 * kS).size(), 2u);
+  EXPECT_EQ(outbox.sends(0), 3);
+  const std::vector<double> ages = outbox.acknowledge({0, 7}, 3 * kS + kS / 2);
+  ASSERT_EQ(ages.size(), 1u);
+  EXPECT_DOUBLE_EQ(ages[0], 3.5);
+  EXPECT_EQ(outbox.size(), 2u);
+  // The interval stops growing at resend_max_period_s (4 s): 1, 2, 4, 4, ...
+  int64_t t = 3 * kS;
+  for (int i = 0; i < 3; ++i) {
+    t += 4 * kS;
+    EXPECT_FALSE(outbox.resendsDue(t).empty()) << "re-send " << i;
+  }
+}
+
+MapUpdate update(int64_t map_id, int64_t version, bool snapshot) {
+  MapUpdate u;
+  u.map_id = map_id;
+  u.version = version;
+  u.is_snapshot = snapshot;
+  return u;
+}
+
+TEST(SyncFollower, AppliesInOrderNeverBackwardsAndWaitsForASnapshotAfterAGap) {
+  MapFollower follower(7);
+  EXPECT_EQ(follower.judge(update(8, 1, true)), MapVerdict::kForeignMap);
+  ASSERT_EQ(follower.judge(update(7, 1, true)), MapVerdict::kApply);
+  follower.applied(update(7, 1, true));
+  EXPECT_EQ(follower.judge(update(7, 1, false)), MapVerdict::kStale);
+  ASSERT_EQ(follower.judge(update(7, 2, false)), MapVerdict::kApply);
+  follower.applied(update(7, 2, false));
+  EXPECT_EQ(follower.judge(update(7, 4, false)), MapVerdict::kMissingDelta);  // 3 was lost
+  EXPECT_EQ(follower.version(), 2);
+  EXPECT_EQ(follower.newestSeen(), 4);
+  const MapReceipt r = follower.receipt(5, 3, 1);
+  EXPECT_EQ(r.applied_version, 2);
+  EXPECT_EQ(r.newest_version_seen, 4);
+  ASSERT_EQ(follower.judge(update(7, 5, true)), MapVerdict::kApply);  // the snapshot repairs it
+  follower.applied(update(7, 5, true));
+  EXPECT_EQ(follower.version(), 5);
+  // A forged version far ahead would freeze the tracker: refused, and not noted as seen.
+  EXPECT_EQ(follower.judge(update(7, int64_t{1} << 62, true)), MapVerdict::kImplausible);
+  EXPECT_EQ(follower.newestSeen(), 5);
+  EXPECT_EQ(follower.judge(update(7, 6, false)), MapVerdict::kApply);
+}
+
+// A map of one keyframe and two points, and the changes that made it.
+struct SmallMap {
+  Map map;
+  MapChanges changes;
+  SmallMap() {
+    KeyframeData data;
+    data.id = 0;
+    data.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(128));
+    map.addKeyframe(makeKeyframe(data, KeyframeBuildOptions{}));
+    for (PointId id : {1, 2}) {
+      MapPoint p;
+      p.id = id;
+      p.p_w = Vec3(0, 0, 1.0 + id);
+      p.source_keyframe = 0;
+      map.addPoint(p);
+      changes.points.insert(id);
+    }
+    changes.keyframes.insert(0);
+  }
+};
+
+TEST(SyncPublisher, SnapshotFirstThenDeltasAtOnceForKeyframesAndRateLimitedForRefinement) {
+  SmallMap m;
+  MapPublisher publisher(MapPublisherOptions{1.0, 30.0, {}});
+  EXPECT_FALSE(publisher.publishDue(m.map, 1, 0)) << "not started: no map id yet";
+  publisher.start(9, 0);
+  publisher.note(m.changes, /*integrated=*/true);
+  auto first = publisher.publishDue(m.map, 1, 0);
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(first->is_snapshot);
+  EXPECT_EQ(first->version, 1);
+  EXPECT_EQ(first->map_id, 9);
+  EXPECT_EQ(first->acked_keyframes, std::vector<KeyframeId>{0});
+  EXPECT_EQ(first->points.size(), 2u);
+  EXPECT_FALSE(publisher.publishDue(m.map, 1, kS / 10)) << "nothing new";
+  m.map.point(1)->p_w.x() += 0.01;
+  MapChanges moved;
+  moved.points = {1};
+  publisher.note(moved, false);
+  EXPECT_FALSE(publisher.publishDue(m.map, 1, kS / 2)) << "refinement waits for map_period_s";
+  auto delta = publisher.publishDue(m.map, 1, kS);
+  ASSERT_TRUE(delta);
+  EXPECT_FALSE(delta->is_snapshot);
+  EXPECT_EQ(delta->version, 2);
+  ASSERT_EQ(delta->moved_points.size(), 1u);
+  publisher.note(MapChanges{}, /*integrated=*/true);  // a new keyframe goes out at once
+  EXPECT_TRUE(publisher.publishDue(m.map, 2, kS + 1));
+  auto periodic = publisher.publishDue(m.map, 2, 31 * kS);
+  ASSERT_TRUE(periodic);
+  EXPECT_TRUE(periodic->is_snapshot) << "every snapshot_period_s";
+}
+
+TEST(SyncPublisher, ReceiptsShowingAStuckTrackerBringASnapshot) {
+  SmallMap m;
+  MapPublisher publisher(MapPublisherOptions{0.0, 1000.0, {}});
+  publisher.start(9, 0);
+  for (int64_t v = 1; v <= 4; ++v) {
+    publisher.note(m.changes, true);
+    ASSERT_TRUE(publisher.publishDue(m.map, 1, v * kS));
+  }
+  MapReceipt r;
+  r.map_id = 9;
+  r.applied_version = 2;
+  r.newest_version_seen = 4;  // 3 was lost: 4 could not be applied
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kSnapshotAsked);
+  auto snapshot = publisher.publishDue(m.map, 1, 5 * kS);
+  ASSERT_TRUE(snapshot);
+  EXPECT_TRUE(snapshot->is_snapshot);
+  EXPECT_EQ(snapshot->version, 5);
+  // Receipts sent before the snapshot arrived ask for nothing at first...
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kNoted) << i;
+  // ...but a snapshot that never arrives is sent again.
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kSnapshotAsked);
+  ASSERT_TRUE(publisher.publishDue(m.map, 1, 5 * kS + 1)->is_snapshot);  // version 6
+  // The last delta lost and nothing after it: two receipts in a row with the same version.
+  publisher.note(m.changes, true);
+  ASSERT_TRUE(publisher.publishDue(m.map, 1, 6 * kS));  // version 7, lost
+  r.applied_version = r.newest_version_seen = 6;
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kNoted);
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kSnapshotAsked);
+  // A receipt for a version never published, or another map, is refused.
+  r.applied_version = r.newest_version_seen = 99;
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kImplausible);
+  r.map_id = 10;
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kForeignMap);
+  EXPECT_EQ(publisher.snapshotsAsked(), 3);
+}
+
+TEST(SyncLink, LosesDelaysDuplicatesAndReordersRepeatably) {
+  LinkOptions options;
+  options.loss = 0.1;
+  options.delay_ms = 50;
+  options.jitter_ms = 30;
+  options.duplicate = 0.1;
+  options.seed = 4;
+  options.outages_us = {{10 * kS, 11 * kS}};
+  auto run = [&options] {
+    MemoryLink<int> link(options);
+    std::vector<int> got;
+    for (int i = 0; i < 2000; ++i) {
+      const int64_t t = i * 10000;  // every 10 ms for 20 s
+      link.send(i, t);
+      for (int m : link.receive(t)) got.push_back(m);
+    }
+    for (int m : link.receive(100 * kS)) got.push_back(m);
+    return std::make_pair(got, link.lost());
+  };
+  const auto [a, lost] = run();
+  const auto [b, lost_b] = run();
+  EXPECT_EQ(a, b) << "seeded: the same deliveries";
+  const double loss = static_cast<double>(lost - 100) / 1900;  // 100 sends in the outage
+  EXPECT_NEAR(loss, 0.1, 0.03);
+  int reordered = 0, duplicated = 0, in_outage = 0;
+  for (size_t i = 1; i < a.size(); ++i) {
+    reordered += a[i] < a[i - 1];
+    duplicated += a[i] == a[i - 1];
+  }
+  for (int m : a) in_outage += m >= 1000 && m < 1100;
+  EXPECT_GT(reordered, 50);
+  EXPECT_GT(duplicated, 50);
+  EXPECT_EQ(in_outage, 0);
+}
+
+}  // namespace
+}  // namespace rgbdslam
