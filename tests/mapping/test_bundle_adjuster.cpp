@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 #include "rgbdslam/mapping/bundle_adjuster.h"
 
 namespace rgbdslam {

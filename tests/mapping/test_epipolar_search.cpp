@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 namespace rgbdslam {
 namespace {

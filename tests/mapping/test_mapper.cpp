@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "rgbdslam/geometry/alignment.h"
-#include "rgbdslam/io/synthetic_scene.h"
-#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/synth/scene.h"
+#include "rgbdslam/model/point_creation.h"
 
 namespace rgbdslam {
 namespace {

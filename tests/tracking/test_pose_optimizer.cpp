@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "rgbdslam/camera/calibration_io.h"
 #include "rgbdslam/eval/trajectory_eval.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 #include "test_support.h"
 

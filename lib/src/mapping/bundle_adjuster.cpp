@@ -11,7 +11,7 @@
 #include <memory>
 #include <ostream>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {

@@ -2,7 +2,7 @@
 // Bundle adjustment with 2-D and depth residuals (paper sec. IV; ARCHITECTURE.md "Bundle
 // adjustment with depth"). Minimises over the free keyframe poses and point positions
 //   sum_ij rho(|e2_ij| / sigma2_ij) + sum_ij rho(|ed_ij| / sigmad_ij)
-// with the residuals of ba_residuals.h, sigma2 = k 2^level [px], sigmad = a d^2 [m] (the
+// with the residuals of model/residuals.h, sigma2 = k 2^level [px], sigmad = a d^2 [m] (the
 // measured d) and rho Tukey's biweight (ceres::TukeyLoss, a = tukey_c * sigma_T, on each
 // residual block on its own), solved by Levenberg-Marquardt with Schur elimination of the
 // points.
@@ -165,7 +165,7 @@ class BundleAdjuster {
 //
 // Pose parameter block: 7 doubles of T_c_w, the quaternion (x, y, z, w; Eigen's coeffs()
 // order) then the translation [m]. Its tangent is the 6-D xi of the left perturbation
-// T_c_w <- exp(xi) * T_c_w, the same as in ba_residuals.h.
+// T_c_w <- exp(xi) * T_c_w, the same as in model/residuals.h.
 //
 // Jacobian trick: a cost function must give Ceres the Jacobian with respect to the 7 ambient
 // coordinates, and Ceres multiplies it by the manifold's PlusJacobian (7x6) to get the

@@ -39,7 +39,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/mapping/bundle_adjuster.h"
-#include "rgbdslam/mapping/slam_mode.h"
+#include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {

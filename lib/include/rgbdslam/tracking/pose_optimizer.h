@@ -18,7 +18,7 @@
 // on a small step before the cap has been applied.
 //
 // Call order: fill PoseObservations, optimisePose(camera, T_c_w_start, observations, options).
-// Frames and units: T_c_w maps world to camera (the residuals' convention, ba_residuals.h),
+// Frames and units: T_c_w maps world to camera (the residuals' convention, model/residuals.h),
 // updated by the left perturbation T_c_w <- exp(xi) T_c_w. Pixels at level 0, depth in m.
 #include <vector>
 

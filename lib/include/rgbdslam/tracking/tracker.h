@@ -22,8 +22,8 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/rgbd_frame.h"
 #include "rgbdslam/map/map.h"
-#include "rgbdslam/mapping/point_creation.h"
-#include "rgbdslam/mapping/slam_mode.h"
+#include "rgbdslam/model/point_creation.h"
+#include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/tracking/pose_estimate.h"
 #include "rgbdslam/util/option_registry.h"
 

@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {

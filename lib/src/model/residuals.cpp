@@ -1,4 +1,4 @@
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 #include <cmath>
 

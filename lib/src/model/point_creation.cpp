@@ -1,4 +1,4 @@
-#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/model/point_creation.h"
 
 #include <algorithm>
 #include <cmath>
