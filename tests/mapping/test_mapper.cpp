@@ -215,7 +215,7 @@ TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {
   const Sequence seq = makeSequence(SlamMode::kMono, 3, 10);
   for (const int partners : {1, 2}) {
     MapperOptions options;
-    options.epipolar_partners_mono = partners;
+    options.epipolar_partners.partners_mono = partners;
     Mapper mapper(seq.camera, options, SlamMode::kMono);
     int epipolar_points = 0;
     for (const KeyframeData& kf : seq.keyframes) epipolar_points = mapper.addKeyframe(kf).epipolar_points;
@@ -234,7 +234,7 @@ TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {
   // The depth modes keep one partner whatever the option says.
   const Sequence with_depth = makeSequence(SlamMode::kDepthInit, 3, 10);
   MapperOptions options;
-  options.epipolar_partners_mono = 3;
+  options.epipolar_partners.partners_mono = 3;
   Mapper mapper(with_depth.camera, options, SlamMode::kDepthInit);
   for (const KeyframeData& kf : with_depth.keyframes) mapper.addKeyframe(kf);
   std::set<KeyframeId> used;
@@ -286,7 +286,7 @@ TEST(Mapper, CullsAPointWhoseMeasurementsAreGrossOutliers) {
 TEST(Mapper, RefineReturnsPromptlyWhenInterrupted) {
   const Sequence seq = makeSequence(SlamMode::kDepthBa, 6);
   MapperOptions options;
-  options.global_ba_every = 1000;  // keep the work for refine()
+  options.ba_windows.global_ba_every = 1000;  // keep the work for refine()
   Mapper mapper(seq.camera, options, SlamMode::kDepthBa);
   for (const auto& kf : seq.keyframes) ASSERT_EQ(mapper.addKeyframe(kf).status, MapperResult::Status::kIntegrated);
   std::atomic<bool> interrupt{true};

@@ -6,6 +6,13 @@
 
 namespace rgbdslam {
 
+void KeyframeBuildOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "keyframe_min_depth_m", &min_depth_m, 0.0, 100.0, "m",
+          "keyframe depth readings nearer than this are invalid");
+  r->bind(s, "keyframe_max_depth_m", &max_depth_m, 0.1, 100.0, "m",
+          "keyframe depth readings farther than this are invalid");
+}
+
 std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
   if (depth.empty()) return std::nullopt;
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));

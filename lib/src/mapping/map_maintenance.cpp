@@ -42,11 +42,31 @@ std::vector<KeyframeId> liveObservers(const Map& map, PointId pid) {
   return out;
 }
 
+// The newest 'count' keyframes.
+std::set<KeyframeId> newestKeyframes(const Map& map, int count) {
+  std::set<KeyframeId> newest;
+  for (auto it = map.keyframes().rbegin(); it != map.keyframes().rend(); ++it) {
+    if (static_cast<int>(newest.size()) >= count) break;
+    newest.insert(it->first);
+  }
+  return newest;
+}
+
 }  // namespace
 
+void CullOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "min_good_measurements", &min_good_measurements, 1, 100, "measurements",
+          "points with fewer good measurements are culled");
+  r->bind(s, "keep_source_only_keyframes", &keep_source_only_keyframes, 0, 1000, "keyframes",
+          "source-only points survive while their keyframe is this recent");
+  r->bind(s, "max_outlier_fraction", &max_outlier_fraction, 0.0, 1.0, "-",
+          "points with a larger share of outlier measurements are culled");
+}
+
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
-                   const std::set<KeyframeId>& recent_keyframes, const CullOptions& options) {
+                   const CullOptions& options) {
   CullResult result;
+  const std::set<KeyframeId> recent_keyframes = newestKeyframes(*map, options.keep_source_only_keyframes);
   std::set<PointId> removed;
   auto remove = [&](PointId pid) {
     map->removePoint(pid);

@@ -5,6 +5,23 @@
 #include <cstdint>
 
 namespace rgbdslam {
+
+void DepthPointOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "depth_points_per_level", &max_points_per_level, 0, 100000, "points",
+          "new points from depth per keyframe and pyramid level at most");
+  r->bind(s, "depth_points_min_shi_tomasi", &min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
+          "weaker corners give no point");
+  r->bind(s, "depth_points_weak_min_shi_tomasi", &weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
+          "a keyframe with few points also takes corners down to this score...");
+  r->bind(s, "depth_points_weak_until_points", &weak_until_points, 0, 100000, "points",
+          "...until it measures this many points (0: never)");
+  r->bind(s, "depth_points_min_separation_px", &min_separation_px, 0.0, 100.0, "px",
+          "new points keep this distance from measured points and each other");
+  r->bind(s, "depth_points_discontinuity", &depth_discontinuity, 0.0, 1.0, "fraction",
+          "a spread of the 3x3 window's depths above this (relative to the corner's) rejects the corner");
+  r->bind(s, "depth_points_dense_fraction", &dense_depth_fraction, 0.0, 1.0, "fraction",
+          "with at least this fraction of pixels valid, a missing 3x3 neighbour rejects a corner");
+}
 namespace {
 
 // Occupancy grid over level-0 pixels with cells of min_separation: a corner is rejected

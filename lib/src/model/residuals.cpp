@@ -38,8 +38,4 @@ bool depthResidual(const SE3& T_c_w, const Vec3& p_w, double depth_measured, dou
   return true;
 }
 
-double sigma2d(int level, double k) { return std::ldexp(k, level); }
-
-double sigmaDepth(double d, double a) { return a * d * d; }
-
 }  // namespace rgbdslam

@@ -18,6 +18,7 @@
 #include "rgbdslam/image/pyramid.h"
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/map/map_types.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -57,6 +58,8 @@ struct KeyframeBuildOptions {
   CornerOptions corners;
   double min_depth_m = 0.3;  // readings nearer than this are treated as invalid [m]
   double max_depth_m = 8.0;  // readings farther than this are treated as invalid [m]
+
+  void bind(OptionRegistry* registry, const std::string& section);  // the depth range
 };
 
 // Builds pyramid, corners, SBI and metric depth from a keyframe message's content.

@@ -9,6 +9,7 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -24,6 +25,8 @@ struct DepthPointOptions {
   int patch_border_px = 6;            // corners this close to the level's border are skipped [px]
   double dense_depth_fraction = 0.5;  // at least this fraction of pixels with depth: a missing 3x3 neighbour rejects a corner
   double depth_discontinuity = 0.05;  // max spread of the 3x3 window's depths relative to the centre's (edges are skipped)
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as depth_points_*
 };
 
 struct NewPoint {
