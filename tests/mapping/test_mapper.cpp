@@ -81,7 +81,7 @@ Sequence makeSequence(SlamMode mode, int num_keyframes, int step = 15) {
     }
     if (depthPointsAllowed(mode, k)) {
       auto kf = makeKeyframe(data, KeyframeBuildOptions{});
-      for (const NewPoint& np : createPointsFromDepth(*kf, seq.camera, DepthPointOptions{}, k * kPointsPerKeyframe)) {
+      for (const NewPoint& np : createPointsFromDepth(*kf, seq.camera, DepthPointOptions{}, provisionalPointId(k, 0))) {
         const auto z = exactDepth(true_depth, np.point.source_uv);
         if (!z) continue;
         data.new_points.push_back(np.point.data());

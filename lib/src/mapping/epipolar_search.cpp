@@ -209,11 +209,8 @@ void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const Pin
     const auto p_w = triangulateChecked(keyframe, cand.uv0, other, uv_o, level, camera, options);
     if (!p_w) { ++st->bad_triangulation; continue; }
     EpipolarPoint ep;
-    ep.point.id = first_id + static_cast<PointId>(created->size());
-    ep.point.p_w = *p_w;
-    ep.point.source_keyframe = keyframe.id;
-    ep.point.source_level = level;
-    ep.point.source_uv = cand.uv0;
+    ep.point = MapPoint(MapPointData{first_id + static_cast<PointId>(created->size()), *p_w,
+                                     keyframe.id, cand.uv0, level});
     ep.in_keyframe = Measurement{ep.point.id, cand.uv0, level, 0.0};
     ep.in_other = Measurement{ep.point.id, uv_o, level, 0.0};
     created->push_back(ep);
@@ -246,7 +243,7 @@ std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyfra
   EpipolarStats& st = stats ? *stats : local;
   std::vector<EpipolarPoint> created;
   std::vector<Eigen::Vector2d> taken;
-  for (const auto& [id, m] : keyframe.measurements) taken.push_back(m.uv);
+  for (const auto& [id, m] : keyframe.measurements()) taken.push_back(m.uv);
   searchCandidates(keyframe, other, camera, options, matching,
                    collectCandidates(keyframe, options, options.min_shi_tomasi, INFINITY), SIZE_MAX,
                    first_id, &taken, &created, &st);

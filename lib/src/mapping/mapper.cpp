@@ -46,7 +46,7 @@ bool usableResult(const BaResult& r) {
 void updateMedianDepth(const Map& map, Keyframe* kf) {
   std::vector<double> depths;
   const SE3 T_c_w = kf->T_c_w();
-  for (const auto& [pid, m] : kf->measurements) {
+  for (const auto& [pid, m] : kf->measurements()) {
     if (const MapPoint* p = map.point(pid)) {
       const double z = (T_c_w * p->p_w).z();
       if (z > 0) depths.push_back(z);
@@ -165,19 +165,14 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   map_id_ = data.map_id;
   next_id_ = data.id + 1;
   utime_ = data.utime;
-  for (const MapPointData& p : data.new_points) {
-    MapPoint point;
-    point.id = p.id, point.p_w = p.p_w, point.source_keyframe = p.source_keyframe;
-    point.source_level = p.level, point.source_uv = p.uv;
-    addPoint(point);
-  }
+  for (const MapPointData& p : data.new_points) addPoint(MapPoint(p));
   for (const Measurement& m : data.measurements) {
     if (map_.point(m.point_id)) addMeasurement(kf->id, m);
     else ++result->dropped_measurements;
   }
   // A provisional point whose source measurement was not sent gets it from its patch.
   for (const MapPointData& p : data.new_points) {
-    if (p.source_keyframe == kf->id && !kf->measurements.count(p.id)) {
+    if (p.source_keyframe == kf->id && !kf->measurements().count(p.id)) {
       const auto d = kf->depthAt(p.uv);
       addMeasurement(kf->id, Measurement{p.id, p.uv, p.level, d ? *d : 0.0});
     }
@@ -264,7 +259,7 @@ int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& othe
   // modes the keyframe's points from depth already took the weak corners that have depth.
   if (depthPointsAllowed(mode_, kf.id)) eo.weak_until_points = 0;
   eo.skip_corners_with_depth = depthPointsAllowed(mode_, kf.id);
-  const PointId first_id = kf.id * kPointsPerKeyframe + kPointsPerKeyframe / 2 + created_before;
+  const PointId first_id = mapperPointId(kf.id, created_before);
   const auto created = epipolarSearch(kf, other, camera_, eo, options_.matching, first_id);
   for (const EpipolarPoint& ep : created) {
     addPoint(ep.point);
@@ -322,7 +317,7 @@ bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
     const Keyframe* source = point ? map_.keyframe(point->source_keyframe) : nullptr;
     if (!source) continue;
     for (const auto& [kf_id, kf] : map_.keyframes()) {
-      if (kf->measurements.count(pid)) continue;
+      if (kf->measurements().count(pid)) continue;
       auto m = findPointInKeyframe(*point, *source, *kf, camera_, options_.refind, options_.matching);
       if (!m) continue;
       if (const auto d = kf->depthAt(m->uv)) m->depth = *d;

@@ -124,13 +124,11 @@ void addPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
       if (!grid->isFree(uv)) continue;
       const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity, dense);
       if (!depth) continue;
+      const PointId id = first_id + static_cast<PointId>(created->size());
       NewPoint np;
-      np.point.id = first_id + static_cast<PointId>(created->size());
-      np.point.p_w = keyframe.T_w_c * camera.unproject(uv, *depth);
-      np.point.source_keyframe = keyframe.id;
-      np.point.source_level = level;
-      np.point.source_uv = uv;
-      np.measurement = Measurement{np.point.id, uv, level, *depth};
+      np.point = MapPoint(MapPointData{id, keyframe.T_w_c * camera.unproject(uv, *depth),
+                                       keyframe.id, uv, level});
+      np.measurement = Measurement{id, uv, level, *depth};
       created->push_back(np);
       grid->occupy(uv);
       ++added;
@@ -145,11 +143,11 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   std::vector<NewPoint> created;
   if (keyframe.depth.empty()) return created;
   SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
-  for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
+  for (const auto& [point_id, m] : keyframe.measurements()) grid.occupy(m.uv);
   const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
   addPointsFromDepth(keyframe, camera, options, options.min_shi_tomasi, SIZE_MAX, first_id, dense,
                      &grid, &created);
-  const size_t measured = keyframe.measurements.size() + created.size();
+  const size_t measured = keyframe.measurements().size() + created.size();
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
   if (measured < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
     // The second pass sees the strong corners again; they are taken or not free any more.

@@ -20,10 +20,6 @@ namespace {
 
 using TrackStatus = TrackResult::Status;
 
-// Provisional points of one keyframe use ids below this offset within its id block; the
-// mapper's own points use the upper half.
-constexpr int64_t kProvisionalPointsPerKeyframe = kPointsPerKeyframe / 2;
-
 // The result of tracking one frame from a start pose.
 struct Attempt {
   SE3 T_c_w;
@@ -227,7 +223,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   data.depth_scale = frame.depth_scale;
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
   const std::vector<NewPoint> points =
-      createPointsFromDepth(*keyframe, camera_, options_.depth_points, 0);
+      createPointsFromDepth(*keyframe, camera_, options_.depth_points, provisionalPointId(0, 0));
   if (static_cast<int>(points.size()) < options_.init_min_points) {
     result.status = TrackResult::Status::kNotInitialised;
     result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
@@ -243,7 +239,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   }
   map_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
-    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, 0)) break;
     addSlot(map_.addPoint(np.point));
     map_.addMeasurement(0, np.measurement);
     data.measurements.push_back(np.measurement);
@@ -371,7 +367,7 @@ bool Tracker::Impl::poseFixed(const PoseUncertainty& uncertainty) const {
 bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points) const {
   std::vector<PoseObservation> observations;
   for (const NewPoint& np : points) {
-    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, 0)) break;
     observations.push_back({np.point.p_w, np.measurement.uv, np.measurement.level,
                             options_.pose.use_depth ? np.measurement.depth : 0.0});
   }
@@ -570,11 +566,11 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
   std::vector<NewPoint> points;
   if (depthPointsAllowed(mode_, data.id)) {
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
-                                   data.id * kPointsPerKeyframe);
+                                   provisionalPointId(data.id, 0));
   }
   map_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
-    if (np.point.id - data.id * kPointsPerKeyframe >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, data.id)) break;
     addSlot(map_.addPoint(np.point));
     map_.addMeasurement(data.id, np.measurement);
     data.measurements.push_back(np.measurement);

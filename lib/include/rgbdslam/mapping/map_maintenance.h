@@ -30,9 +30,6 @@ struct CullResult {
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
                    const CullOptions& options);
 
-// Removes one measurement (the point stays, with its other measurements).
-void removeMeasurement(Map* map, KeyframeId keyframe_id, PointId point_id);
-
 // Point ids of the map in increasing order.
 std::vector<PointId> sortedPointIds(const Map& map);
 

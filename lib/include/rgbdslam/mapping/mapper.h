@@ -25,9 +25,7 @@
 // not see the scale, so keyframe 0's points (the map initialisation from measured depth)
 // are held fixed and keep it (fixing a second, tracked keyframe instead would pin its
 // tracking error into the whole map).
-// Point ids: provisional points from the tracker use keyframe_id * kPointsPerKeyframe + i
-// (i < kPointsPerKeyframe / 2); points the mapper creates for keyframe k use the upper half
-// of k's block, so both sides name points alike without talking.
+// Point ids: the tracker's provisional points and the mapper's own, by point_ids.h.
 // Determinism: no randomness; everything iterates in id order, so equal inputs give equal
 // maps. MapUpdate::utime is the utime of the newest integrated keyframe.
 // Threads: not thread-safe; one thread calls everything (interrupt may be set by another).

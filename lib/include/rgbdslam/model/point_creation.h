@@ -4,7 +4,7 @@
 // point p_w = T_w_c * unproject(uv, d). Used for the initial map (keyframe 0) and, by the
 // tracker, for the provisional points of each new keyframe. Corners close to a point the
 // keyframe already measures are skipped, so a keyframe does not duplicate what it tracks.
-// Ids: first_id + i, where the caller passes keyframe_id * kPointsPerKeyframe.
+// Ids: first_id + i, where the tracker passes provisionalPointId(keyframe_id, 0) (point_ids.h).
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
