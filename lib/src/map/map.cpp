@@ -43,8 +43,6 @@ std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeB
   keyframe->id = data.id;
   keyframe->utime = data.utime;
   keyframe->T_w_c = data.T_w_c;
-  keyframe->raw_depth = data.depth;
-  keyframe->depth_scale = data.depth_scale;
   keyframe->depth = depthToMetres(data.depth, data.depth_scale, options.min_depth_m, options.max_depth_m);
   buildPyramid(data.grey, kMaxLevels, &keyframe->pyramid);
   detectPyramidCorners(keyframe->pyramid, options.corners, /*with_maxima=*/true, &keyframe->corners);

@@ -66,7 +66,6 @@ class Tracker::Impl {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     result.pose.utime = frame.utime;
     result.pose.seq = frame.seq;
-    result.pose.latency_ms = result.track_ms;
     return result;
   }
 

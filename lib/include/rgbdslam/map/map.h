@@ -31,8 +31,6 @@ struct Keyframe {
   KeyframeId id = -1;
   int64_t utime = 0;        // acquisition time [us]
   SE3 T_w_c;
-  cv::Mat raw_depth;        // CV_16UC1 raw units as received (0 = none), or empty
-  double depth_scale = 5000.0;  // raw units per metre
   cv::Mat depth;            // CV_32FC1 [m], NaN where there is no reading, or empty
   ImagePyramid pyramid;     // grey, kMaxLevels levels
   std::vector<LevelCorners> corners;  // FAST corners per level
