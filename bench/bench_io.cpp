@@ -9,7 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "common/lcm_conversions.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 
 using namespace rgbdslam;

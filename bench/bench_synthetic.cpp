@@ -3,7 +3,7 @@
 // Run: build/bench/bench_synthetic (items_per_second = frames/s).
 #include <benchmark/benchmark.h>
 
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 namespace {
 

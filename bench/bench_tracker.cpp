@@ -15,7 +15,7 @@
 #include <filesystem>
 
 #include "rgbdslam/camera/calibration_io.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 #include "rgbdslam/tracking/tracker.h"
 

@@ -2,7 +2,7 @@
 
 #include "common/lcm_log_source.h"
 #include "common/openni2_source.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 
 namespace rgbdslam {

@@ -4,7 +4,7 @@
 
 #include "common/cli.h"
 #include "common/process.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 using namespace rgbdslam;
 

@@ -11,8 +11,8 @@
 #include <thread>
 #include <vector>
 
-#include "rgbdslam/mapping/ba_residuals.h"
 #include "rgbdslam/mapping/bundle_adjuster.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {
@@ -212,7 +212,7 @@ TEST(BaCeresAdapters, CostJacobiansThroughManifoldMatchAnalyticAndNumeric) {
   const SE3 T_c_w = SE3::exp(xi);
   const Vec3 p_w = T_c_w.inverse() * Vec3(0.4, -0.3, 2.2);
   const Eigen::Vector2d uv(350.0, 180.0);
-  const double sigma_2d = 1.974, depth = 2.1, sigma_d = sigmaDepth(depth);
+  const double sigma_2d = 1.974, depth = 2.1, sigma_d = NoiseModel{}.sigmaDepth(depth);
 
   ba_ceres::PoseManifold manifold;
   double pose[7];

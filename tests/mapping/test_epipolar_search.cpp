@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 namespace rgbdslam {
 namespace {
@@ -57,7 +57,11 @@ TEST(EpipolarSearch, TriangulatedPointsLieOnTheSurface) {
   const auto older = keyframeOf(scene, frame_a, 0);
   const auto newer = keyframeOf(scene, frame_b, 1);
   EpipolarStats stats;
-  const auto points = epipolarSearch(*newer, *older, scene.camera(), EpipolarOptions{}, 1000, &stats);
+  EpipolarOptions options;
+  options.weak_until_points = 0;  // strong corners only
+  PatchMatchOptions matching;
+  matching.max_zmssd_flat_ratio = 0.0;  // the absolute threshold only
+  const auto points = epipolarSearch(*newer, *older, scene.camera(), options, matching, 1000, &stats);
   const cv::Mat true_depth = scene.render(frame_b).depthMetres();
   std::vector<double> errors;
   for (const EpipolarPoint& ep : points) {
@@ -93,8 +97,10 @@ TEST(EpipolarSearch, WeakCornersOfAFewPointsKeyframeTriangulateInForwardMotion) 
   EpipolarOptions with_weak = strong_only;
   with_weak.weak_until_points = 100;
   EpipolarStats strong_stats, weak_stats;
-  const auto strong = epipolarSearch(*newer, *older, scene.camera(), strong_only, 1000, &strong_stats);
-  const auto weak = epipolarSearch(*newer, *older, scene.camera(), with_weak, 1000, &weak_stats);
+  PatchMatchOptions matching;
+  matching.max_zmssd_flat_ratio = 0.0;  // the absolute threshold only
+  const auto strong = epipolarSearch(*newer, *older, scene.camera(), strong_only, matching, 1000, &strong_stats);
+  const auto weak = epipolarSearch(*newer, *older, scene.camera(), with_weak, matching, 1000, &weak_stats);
   std::printf("corridor epipolar: strong only %zu points (%d tried), with weak corners %zu (%d tried)\n",
               strong.size(), strong_stats.tried, weak.size(), weak_stats.tried);
   ASSERT_GE(weak.size(), strong.size() + 20);

@@ -13,8 +13,8 @@
 #include <thread>
 
 #include "rgbdslam/geometry/alignment.h"
-#include "rgbdslam/io/synthetic_scene.h"
-#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/synth/scene.h"
+#include "rgbdslam/model/point_creation.h"
 
 namespace rgbdslam {
 namespace {
@@ -82,7 +82,7 @@ Sequence makeSequence(SlamMode mode, int num_keyframes, int step = 15) {
     }
     if (depthPointsAllowed(mode, k)) {
       auto kf = makeKeyframe(data, KeyframeBuildOptions{});
-      for (const NewPoint& np : createPointsFromDepth(*kf, seq.camera, DepthPointOptions{}, k * kPointsPerKeyframe)) {
+      for (const NewPoint& np : createPointsFromDepth(*kf, seq.camera, DepthPointOptions{}, provisionalPointId(k, 0))) {
         const auto z = exactDepth(true_depth, np.point.source_uv);
         if (!z) continue;
         data.new_points.push_back(np.point.data());
@@ -204,7 +204,7 @@ TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {
   const Sequence seq = makeSequence(SlamMode::kMono, 3, 10);
   for (const int partners : {1, 2}) {
     MapperOptions options;
-    options.epipolar_partners_mono = partners;
+    options.epipolar_partners.partners_mono = partners;
     Mapper mapper(seq.camera, options, SlamMode::kMono);
     int epipolar_points = 0;
     for (const KeyframeData& kf : seq.keyframes) epipolar_points = mapper.addKeyframe(kf).epipolar_points;
@@ -223,7 +223,7 @@ TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {
   // The depth modes keep one partner whatever the option says.
   const Sequence with_depth = makeSequence(SlamMode::kDepthInit, 3, 10);
   MapperOptions options;
-  options.epipolar_partners_mono = 3;
+  options.epipolar_partners.partners_mono = 3;
   Mapper mapper(with_depth.camera, options, SlamMode::kDepthInit);
   for (const KeyframeData& kf : with_depth.keyframes) mapper.addKeyframe(kf);
   std::set<KeyframeId> used;
@@ -276,7 +276,7 @@ TEST(Mapper, CullsAPointWhoseMeasurementsAreGrossOutliers) {
 TEST(Mapper, RefineReturnsPromptlyWhenInterrupted) {
   const Sequence seq = makeSequence(SlamMode::kDepthBa, 6);
   MapperOptions options;
-  options.global_ba_every = 1000;  // keep the work for refine()
+  options.ba_windows.global_ba_every = 1000;  // keep the work for refine()
   Mapper mapper(seq.camera, options, SlamMode::kDepthBa);
   for (const auto& kf : seq.keyframes) ASSERT_EQ(mapper.addKeyframe(kf).status, MapperResult::Status::kIntegrated);
   std::atomic<bool> interrupt{true};

@@ -53,7 +53,7 @@ KeyframeData makeKeyframe(const PinholeCamera& camera, KeyframeId k) {
   for (int i = 0; i < 10; ++i) {
     const Eigen::Vector2d uv(20.0 + 12.0 * i, 30.0 + 6.0 * i);
     MapPointData p;
-    p.id = k * kPointsPerKeyframe + i;
+    p.id = provisionalPointId(k, i);
     p.source_keyframe = k;
     p.uv = uv;
     p.p_w = kf.T_w_c * camera.unproject(uv, 2.0);
@@ -89,10 +89,7 @@ struct Rig {
     replica.addKeyframe(rgbdslam::makeKeyframe(kf, KeyframeBuildOptions{}));
     for (size_t i = 0; i < kf.new_points.size(); ++i) {
       NewPoint np;
-      np.point.id = kf.new_points[i].id;
-      np.point.p_w = kf.new_points[i].p_w;
-      np.point.source_keyframe = k;
-      np.point.source_uv = kf.new_points[i].uv;
+      np.point = MapPoint(kf.new_points[i]);
       np.measurement = kf.measurements[i];
       replica.addProvisionalPoint(k, np);
     }

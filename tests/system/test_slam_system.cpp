@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "rgbdslam/eval/trajectory_eval.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 namespace rgbdslam {
 namespace {

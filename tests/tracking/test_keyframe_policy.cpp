@@ -13,6 +13,9 @@ class KeyframePolicyTest : public ::testing::Test {
     auto keyframe = std::make_unique<Keyframe>();
     keyframe->id = 0;
     map_.addKeyframe(std::move(keyframe));
+    // The distance and angle rules alone; the few-points rules have their own tests.
+    options_.few_points = 0;
+    options_.few_points_no_depth = 0;
     input_.tracking_good = true;
     input_.frames_since_keyframe = options_.min_frames_between_keyframes;
     input_.median_depth_m = 2.0;  // keyframe distance threshold 0.2 m

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {
@@ -77,8 +77,8 @@ TEST(PoseOptimizer, UncertaintyMatchesTheSpreadUnderMeasurementNoise) {
   for (int trial = 0; trial < kTrials; ++trial) {
     std::vector<PoseObservation> noisy = problem.observations;
     for (PoseObservation& obs : noisy) {
-      obs.uv += sigma2d(obs.level) * Eigen::Vector2d(gauss(rng), gauss(rng));
-      obs.depth += sigmaDepth(obs.depth, options.depth_sigma_coefficient) * gauss(rng);
+      obs.uv += options.noise.sigma2d(obs.level) * Eigen::Vector2d(gauss(rng), gauss(rng));
+      obs.depth += options.noise.sigmaDepth(obs.depth) * gauss(rng);
     }
     const PoseOptimizerResult result = optimisePose(problem.camera, problem.T_c_w_true, noisy, options);
     ASSERT_TRUE(result.ok);

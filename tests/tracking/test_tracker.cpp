@@ -9,7 +9,7 @@
 
 #include "rgbdslam/camera/calibration_io.h"
 #include "rgbdslam/eval/trajectory_eval.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 #include "test_support.h"
 
@@ -88,17 +88,17 @@ TEST(Tracker, TracksSyntheticRoomWithoutMapper) {
 // the last frame's quality while what is left still counts as good.
 TEST(Tracker, RetriesWithoutCoarseStageOnPoorOrDroppedQuality) {
   TrackerOptions options;
-  options.quality_good = 0.3;
-  options.retry_quality_ratio = 0.6;
+  options.quality.good = 0.3;
+  options.coarse.retry_quality_ratio = 0.6;
   EXPECT_TRUE(coarseRetryWanted(options, 0.25, 0.0));   // poor
   EXPECT_FALSE(coarseRetryWanted(options, 0.5, 0.0));  // good, no last frame
   EXPECT_FALSE(coarseRetryWanted(options, 0.5, 0.8));   // 0.5 >= 0.6 * 0.8
   EXPECT_TRUE(coarseRetryWanted(options, 0.38, 0.81));  // the corridor's end wall: 0.81 -> 0.38
-  options.retry_quality_ratio = 0.0;                    // off: only the poor frames
+  options.coarse.retry_quality_ratio = 0.0;                    // off: only the poor frames
   EXPECT_FALSE(coarseRetryWanted(options, 0.38, 0.81));
   EXPECT_TRUE(coarseRetryWanted(options, 0.25, 0.81));
-  options.retry_without_coarse = false;                 // never
-  options.retry_quality_ratio = 0.6;
+  options.coarse.retry_without = false;                 // never
+  options.coarse.retry_quality_ratio = 0.6;
   EXPECT_FALSE(coarseRetryWanted(options, 0.25, 0.81));
   EXPECT_FALSE(coarseRetryWanted(options, 0.38, 0.81));
 }
@@ -157,7 +157,7 @@ TEST(Tracker, MonoTracksWithoutTheFramesDepth) {
 
 TEST(Tracker, KeyframesGetIdsMeasurementsAndProvisionalPoints) {
   TrackerOptions options;
-  options.min_frames_between_keyframes = 5;
+  options.keyframes.min_frames_between_keyframes = 5;
   Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 7);
   KeyframeId expected_id = 0;
   int last_keyframe_frame = 0;
@@ -168,7 +168,7 @@ TEST(Tracker, KeyframesGetIdsMeasurementsAndProvisionalPoints) {
     EXPECT_EQ(kf.id, expected_id++);
     EXPECT_EQ(kf.map_id, 7);
     if (kf.id == 0) continue;
-    EXPECT_GE(static_cast<int>(i) - last_keyframe_frame, options.min_frames_between_keyframes);
+    EXPECT_GE(static_cast<int>(i) - last_keyframe_frame, options.keyframes.min_frames_between_keyframes);
     last_keyframe_frame = static_cast<int>(i);
     const size_t tracked = kf.measurements.size() - kf.new_points.size();
     EXPECT_GT(tracked, 50u);
@@ -285,7 +285,7 @@ TEST(Tracker, RelocalisesFromTheLastPoseOnADodgyButFixedView) {
   const TrackResult result = tracker.track(hidden);
   ASSERT_EQ(result.status, Status::kRelocalised);
   // Measured: quality 0.19 (133 of 699 points), dodgy; 0.97 with nothing hidden.
-  EXPECT_LT(result.pose.quality, TrackerOptions{}.quality_good);
+  EXPECT_LT(result.pose.quality, TrackerOptions{}.quality.good);
   EXPECT_LT(positionError(result.pose.T_w_c, 152), 0.02);
 }
 

@@ -67,6 +67,33 @@ TEST(OptionRegistry, CommandLineAssignments) {
   EXPECT_FALSE(r.set("rate=1"));
 }
 
+TEST(OptionRegistry, OneOptionFeedsEveryCopyBoundToIt) {
+  double tracker_copy = 1.5, mapper_copy = 1.5;
+  OptionRegistry r;
+  r.bind("noise", "k", &tracker_copy, 0.0, 10.0, "px", "shared");
+  r.bind("other", "x", &mapper_copy, 0.0, 10.0, "", "unrelated");
+  r.bind("noise", "k", &mapper_copy, 0.0, 10.0, "px", "shared");
+  ASSERT_TRUE(r.set("noise.k=2.5"));
+  EXPECT_DOUBLE_EQ(tracker_copy, 2.5);
+  EXPECT_DOUBLE_EQ(mapper_copy, 2.5);
+  EXPECT_FALSE(r.set("noise.k=20"));
+  // Listed once, sections in the order they were first bound.
+  EXPECT_EQ(r.yamlText(), "%YAML:1.0\n\nnoise:\n  # shared [px]\n  k: 2.5\n\nother:\n"
+                          "  # unrelated\n  x: 2.5\n");
+}
+
+TEST(OptionRegistry, BindsAnEnumerationByName) {
+  enum class Solver { kDense, kSparse };
+  Solver solver = Solver::kDense;
+  OptionRegistry r;
+  r.bind("s", "solver", &solver, {{"dense", Solver::kDense}, {"sparse", Solver::kSparse}}, "how");
+  EXPECT_NE(r.describe().find("s.solver = dense [dense|sparse]"), std::string::npos);
+  ASSERT_TRUE(r.set("s.solver=sparse"));
+  EXPECT_EQ(solver, Solver::kSparse);
+  EXPECT_FALSE(r.set("s.solver=cholesky"));
+  EXPECT_EQ(solver, Solver::kSparse);
+}
+
 TEST(OptionRegistry, ShippedSlamConfigMatchesTheDefaults) {
   SlamOptions defaults;
   OptionRegistry expected;

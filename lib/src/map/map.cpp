@@ -6,6 +6,13 @@
 
 namespace rgbdslam {
 
+void KeyframeBuildOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "keyframe_min_depth_m", &min_depth_m, 0.0, 100.0, "m",
+          "keyframe depth readings nearer than this are invalid");
+  r->bind(s, "keyframe_max_depth_m", &max_depth_m, 0.1, 100.0, "m",
+          "keyframe depth readings farther than this are invalid");
+}
+
 std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
   if (depth.empty()) return std::nullopt;
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
@@ -36,19 +43,17 @@ std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeB
   keyframe->id = data.id;
   keyframe->utime = data.utime;
   keyframe->T_w_c = data.T_w_c;
-  keyframe->raw_depth = data.depth;
-  keyframe->depth_scale = data.depth_scale;
   keyframe->depth = depthToMetres(data.depth, data.depth_scale, options.min_depth_m, options.max_depth_m);
   buildPyramid(data.grey, kMaxLevels, &keyframe->pyramid);
   detectPyramidCorners(keyframe->pyramid, options.corners, /*with_maxima=*/true, &keyframe->corners);
   keyframe->sbi = makeSmallBlurryImage(keyframe->pyramid);
-  for (const auto& m : data.measurements) keyframe->measurements[m.point_id] = m;
+  for (const auto& m : data.measurements) keyframe->measurements_[m.point_id] = m;
   return keyframe;
 }
 
 Keyframe* Map::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
   Keyframe* raw = keyframe.get();
-  for (const auto& [point_id, m] : raw->measurements) observers_[point_id].push_back(raw->id);
+  for (const auto& [point_id, m] : raw->measurements_) observers_[point_id].push_back(raw->id);
   keyframes_[raw->id] = std::move(keyframe);
   return raw;
 }
@@ -88,7 +93,7 @@ void Map::removePoint(PointId id) {
   const auto obs = observers_.find(id);
   if (obs != observers_.end()) {
     for (KeyframeId kf : obs->second) {
-      if (Keyframe* keyframe = this->keyframe(kf)) keyframe->measurements.erase(id);
+      if (Keyframe* keyframe = this->keyframe(kf)) keyframe->measurements_.erase(id);
     }
     observers_.erase(obs);
   }
@@ -98,9 +103,26 @@ void Map::removePoint(PointId id) {
 void Map::addMeasurement(KeyframeId keyframe_id, const Measurement& measurement) {
   Keyframe* keyframe = this->keyframe(keyframe_id);
   if (!keyframe || !point(measurement.point_id)) return;
-  const bool is_new = keyframe->measurements.count(measurement.point_id) == 0;
-  keyframe->measurements[measurement.point_id] = measurement;
+  const bool is_new = keyframe->measurements_.count(measurement.point_id) == 0;
+  keyframe->measurements_[measurement.point_id] = measurement;
   if (is_new) observers_[measurement.point_id].push_back(keyframe_id);
+}
+
+void Map::removeMeasurement(KeyframeId keyframe_id, PointId point_id) {
+  Keyframe* keyframe = this->keyframe(keyframe_id);
+  if (!keyframe || keyframe->measurements_.erase(point_id) == 0) return;
+  const auto obs = observers_.find(point_id);
+  if (obs == observers_.end()) return;
+  std::vector<KeyframeId>& ids = obs->second;
+  ids.erase(std::remove(ids.begin(), ids.end(), keyframe_id), ids.end());
+  if (ids.empty()) observers_.erase(obs);
+}
+
+void Map::setMeasurementDepth(KeyframeId keyframe_id, PointId point_id, double depth) {
+  Keyframe* keyframe = this->keyframe(keyframe_id);
+  if (!keyframe) return;
+  const auto it = keyframe->measurements_.find(point_id);
+  if (it != keyframe->measurements_.end()) it->second.depth = depth;
 }
 
 std::vector<KeyframeId> Map::observers(PointId id) const {

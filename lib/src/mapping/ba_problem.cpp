@@ -12,7 +12,7 @@ std::set<PointId> pointsOf(const Map& map, const std::set<KeyframeId>& free_keyf
   for (KeyframeId id : free_keyframes) {
     const Keyframe* kf = map.keyframe(id);
     if (!kf) continue;
-    for (const auto& [point_id, m] : kf->measurements) {
+    for (const auto& [point_id, m] : kf->measurements()) {
       if (map.point(point_id)) points.insert(point_id);
     }
   }
@@ -32,7 +32,7 @@ MapBaProblem buildBaProblem(const Map& map, const PinholeCamera& camera,
   for (PointId pid : point_ids) {
     for (KeyframeId kf : map.observers(pid)) {
       const Keyframe* keyframe = map.keyframe(kf);
-      if (keyframe && keyframe->measurements.count(pid)) seen_by[kf].push_back(pid);
+      if (keyframe && keyframe->measurements().count(pid)) seen_by[kf].push_back(pid);
     }
   }
   std::map<KeyframeId, int> keyframe_index;
@@ -58,7 +58,7 @@ MapBaProblem buildBaProblem(const Map& map, const PinholeCamera& camera,
   for (const auto& [kf, pids] : seen_by) {
     const Keyframe* keyframe = map.keyframe(kf);
     for (PointId pid : pids) {
-      const Measurement& m = keyframe->measurements.at(pid);
+      const Measurement& m = keyframe->measurements().at(pid);
       ba.problem.observations.push_back({keyframe_index[kf], point_index[pid], m.uv, m.level, m.depth});
       ba.observation_ids.emplace_back(kf, pid);
     }
@@ -97,11 +97,11 @@ int applyBaOutliers(const MapBaProblem& ba, const BaResult& result, Map* map,
     if (result.outlier_2d[i]) pending_2d_outliers->insert({pid, kf});
     else pending_2d_outliers->erase({pid, kf});
     if (!result.outlier_depth[i]) continue;
-    Keyframe* keyframe = map->keyframe(kf);
+    const Keyframe* keyframe = map->keyframe(kf);
     if (!keyframe) continue;
-    const auto it = keyframe->measurements.find(pid);
-    if (it != keyframe->measurements.end() && it->second.depth > 0.0) {
-      it->second.depth = 0.0;
+    const auto it = keyframe->measurements().find(pid);
+    if (it != keyframe->measurements().end() && it->second.depth > 0.0) {
+      map->setMeasurementDepth(kf, pid, 0.0);
       ++dropped_depth;
     }
   }

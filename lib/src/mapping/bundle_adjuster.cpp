@@ -9,9 +9,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <ostream>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 
@@ -111,25 +110,41 @@ bool DepthCost::Evaluate(double const* const* parameters, double* residuals,
 // ---------------------------------------------------------------------------------------
 // Options and status
 
-void BaOptions::print(std::ostream& out) const {
-  static const char* const kSolverNames[] = {"auto", "dense_schur", "sparse_schur",
-                                             "iterative_schur"};
-  out << "sigma_2d_k: " << sigma_2d_k << "\n"
-      << "depth_sigma_a: " << depth_sigma_a << "\n"
-      << "use_depth: " << (use_depth ? "true" : "false") << "\n"
-      << "tukey_c: " << tukey_c << "\n"
-      << "min_sigma_t: " << min_sigma_t << "\n"
-      << "weight_by_sigma_t: " << (weight_by_sigma_t ? "true" : "false") << "\n"
-      << "max_iterations: " << max_iterations << "\n"
-      << "robust_rounds: " << robust_rounds << "\n"
-      << "sigma_t_max_shrink: " << sigma_t_max_shrink << "\n"
-      << "sigma_t_settled_ratio: " << sigma_t_settled_ratio << "\n"
-      << "function_tolerance: " << function_tolerance << "\n"
-      << "gradient_tolerance: " << gradient_tolerance << "\n"
-      << "parameter_tolerance: " << parameter_tolerance << "\n"
-      << "num_threads: " << num_threads << "\n"
-      << "linear_solver: " << kSolverNames[static_cast<int>(linear_solver)] << "\n"
-      << "dense_schur_max_poses: " << dense_schur_max_poses << "\n";
+void BaOptions::bind(OptionRegistry* r, const std::string& s) {
+  noise.bind(r);
+  r->bind(s, "use_depth", &use_depth,
+          "add the depth residuals (only in mode depth-ba, where false leaves 2-D bundle "
+          "adjustment as in depth-init)");
+  r->bind(s, "tukey_c", &tukey_c, 0.1, 100.0, "sigma_T", "Tukey biweight cut-off");
+  r->bind(s, "min_sigma_t", &min_sigma_t, 1e-3, 100.0, "sigma",
+          "floor of the robust scale sigma_T, so that a perfect map does not make every "
+          "measurement an outlier");
+  r->bind(s, "weight_by_sigma_t", &weight_by_sigma_t,
+          "weight each residual kind (2-D, depth) also by its robustly measured noise relative "
+          "to the model; false: the paper's fixed 1 / sigma^2");
+  r->bind(s, "max_iterations", &max_iterations, 1, 1000, "iterations",
+          "Levenberg-Marquardt iterations per solve");
+  r->bind(s, "robust_rounds", &robust_rounds, 1, 20, "rounds", "IRLS passes (estimate sigma_T, solve)");
+  r->bind(s, "sigma_t_max_shrink", &sigma_t_max_shrink, 1.001, 1000.0, "-",
+          "sigma_T falls at most by this factor from one round to the next");
+  r->bind(s, "sigma_t_settled_ratio", &sigma_t_settled_ratio, 0.001, 1.0, "-",
+          "stop the rounds once no sigma_T estimate is below this fraction of the last one");
+  r->bind(s, "function_tolerance", &function_tolerance, 0.0, 1.0, "-",
+          "stop when |cost change| / cost is below");
+  r->bind(s, "gradient_tolerance", &gradient_tolerance, 0.0, 1.0, "-",
+          "stop when max |gradient| is below");
+  r->bind(s, "parameter_tolerance", &parameter_tolerance, 0.0, 1.0, "-",
+          "stop when |step| / |x| is below");
+  r->bind(s, "num_threads", &num_threads, 1, 64, "threads", "Ceres threads");
+  r->bind(s, "linear_solver", &linear_solver,
+          {{"auto", LinearSolver::kAuto},
+           {"dense_schur", LinearSolver::kDenseSchur},
+           {"sparse_schur", LinearSolver::kSparseSchur},
+           {"iterative_schur", LinearSolver::kIterativeSchur}},
+          "reduced camera system: dense or sparse Cholesky or conjugate gradients; auto: dense "
+          "up to dense_schur_max_poses free poses");
+  r->bind(s, "dense_schur_max_poses", &dense_schur_max_poses, 1, 10000, "poses",
+          "automatic solver: dense Schur up to this many free poses");
 }
 
 const char* toString(BaResult::Status status) {
@@ -305,9 +320,9 @@ void BaSession::selectObservations() {
         reprojectionResidual(*problem_->camera, T_c_w, point_blocks_[obs.point_index], obs.uv, &e);
     use.behind_camera = !use.use_2d;
     if (!use.use_2d) continue;
-    use.sigma_2d = sigma2d(obs.level, options_.sigma_2d_k);
+    use.sigma_2d = options_.noise.sigma2d(obs.level);
     use.use_depth = options_.use_depth && std::isfinite(obs.depth) && obs.depth > 0.0;
-    if (use.use_depth) use.sigma_depth = sigmaDepth(obs.depth, options_.depth_sigma_a);
+    if (use.use_depth) use.sigma_depth = options_.noise.sigmaDepth(obs.depth);
     rows_per_point[obs.point_index] += 2 + (use.use_depth ? 1 : 0);
   }
   // A free point with fewer than 3 residual rows (one observation, no depth) can slide along

@@ -12,6 +12,23 @@ int flatCappedAcceptance(const Patch& patch, int max_zmssd, double flat_ratio) {
   return std::min(max_zmssd, static_cast<int>(flat_ratio * energy));
 }
 
+int PatchMatchOptions::acceptance(const Patch& patch) const {
+  return flatCappedAcceptance(patch, max_zmssd_per_pixel * kPatchArea, max_zmssd_flat_ratio);
+}
+
+void PatchMatchOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "max_zmssd_per_pixel", &max_zmssd_per_pixel, 1, 65025, "grey^2",
+          "patch acceptance (ZMSSD / 64) for epipolar search and re-finding");
+  r->bind(s, "max_zmssd_flat_ratio", &max_zmssd_flat_ratio, 0.0, 2.0, "-",
+          "...and below this times the template's zero-mean energy, which a textureless patch "
+          "exceeds (0: off)");
+}
+
+void RefindOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "refind_search_radius_px", &search_radius_px, 1, 50, "level px",
+          "re-finding: search radius around the prediction");
+}
+
 std::optional<Eigen::Matrix2d> patchWarp(const MapPoint& point, const Keyframe& source,
                                          const Keyframe& target, const PinholeCamera& camera) {
   const Vec3 p_s = source.T_c_w() * point.p_w;
@@ -32,7 +49,8 @@ std::optional<Eigen::Matrix2d> patchWarp(const MapPoint& point, const Keyframe& 
 
 std::optional<Measurement> findPointInKeyframe(const MapPoint& point, const Keyframe& source,
                                                const Keyframe& target, const PinholeCamera& camera,
-                                               const RefindOptions& options) {
+                                               const RefindOptions& options,
+                                               const PatchMatchOptions& matching) {
   const auto predicted = camera.project(target.T_c_w() * point.p_w);
   if (!predicted || !camera.inImage(*predicted, options.border_px)) return std::nullopt;
   const auto A = patchWarp(point, source, target, camera);
@@ -46,9 +64,7 @@ std::optional<Measurement> findPointInKeyframe(const MapPoint& point, const Keyf
   }
   const cv::Mat& image = target.pyramid.levels[level];
   const auto found = searchPatch(patch, image, target.corners[level], levelFromZero(*predicted, level),
-                                 options.search_radius_px,
-                                 flatCappedAcceptance(patch, options.max_zmssd,
-                                                      options.max_zmssd_flat_ratio));
+                                 options.search_radius_px, matching.acceptance(patch));
   if (!found) return std::nullopt;
   Eigen::Vector2d pos(found->x, found->y);
   if (!refineSubpixel(patch, image, &pos)) return std::nullopt;

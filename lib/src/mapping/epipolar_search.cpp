@@ -115,7 +115,7 @@ enum class MatchOutcome { kFound, kNoMatch, kAmbiguous };
 // Best ZMSSD among the candidates, distinct from the second best (> 2 px away).
 MatchOutcome bestDistinctMatch(const Patch& patch, const cv::Mat& image,
                                const std::vector<cv::Point2i>& candidates,
-                               const EpipolarOptions& options, cv::Point2i* best) {
+                               const EpipolarOptions& options, int max_zmssd, cv::Point2i* best) {
   std::vector<std::pair<int, cv::Point2i>> scored;
   for (const cv::Point2i& c : candidates) {
     if (patchInImage(image, c)) scored.emplace_back(zmssdAt(patch, image, c), c);
@@ -124,9 +124,7 @@ MatchOutcome bestDistinctMatch(const Patch& patch, const cv::Mat& image,
   const auto min_it = std::min_element(scored.begin(), scored.end(), [](const auto& a, const auto& b) {
     return std::tie(a.first, a.second.y, a.second.x) < std::tie(b.first, b.second.y, b.second.x);
   });
-  if (min_it->first >= flatCappedAcceptance(patch, options.max_zmssd, options.max_zmssd_flat_ratio)) {
-    return MatchOutcome::kNoMatch;
-  }
+  if (min_it->first >= max_zmssd) return MatchOutcome::kNoMatch;
   int second = INT_MAX;
   for (const auto& [score, c] : scored) {
     const cv::Point2i d = c - min_it->second;
@@ -179,7 +177,8 @@ namespace {
 // One pass over 'candidates' (at most options.max_points tried, and none once the keyframe
 // measures stop_at_points: taken.size()), appending to 'created'.
 void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const PinholeCamera& camera,
-                      const EpipolarOptions& options, const std::vector<Candidate>& candidates,
+                      const EpipolarOptions& options, const PatchMatchOptions& matching,
+                      const std::vector<Candidate>& candidates,
                       size_t stop_at_points, PointId first_id, std::vector<Eigen::Vector2d>* taken,
                       std::vector<EpipolarPoint>* created, EpipolarStats* st) {
   const double sep2 = options.min_separation_px * options.min_separation_px;
@@ -200,7 +199,8 @@ void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const Pin
     if (near.empty()) { ++st->no_candidate; continue; }
     cv::Point2i match;
     const cv::Mat& other_image = other.pyramid.levels[level];
-    const MatchOutcome outcome = bestDistinctMatch(patch, other_image, near, options, &match);
+    const MatchOutcome outcome =
+        bestDistinctMatch(patch, other_image, near, options, matching.acceptance(patch), &match);
     if (outcome == MatchOutcome::kNoMatch) { ++st->no_match; continue; }
     if (outcome == MatchOutcome::kAmbiguous) { ++st->ambiguous; continue; }
     Eigen::Vector2d pos(match.x, match.y);
@@ -209,11 +209,8 @@ void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const Pin
     const auto p_w = triangulateChecked(keyframe, cand.uv0, other, uv_o, level, camera, options);
     if (!p_w) { ++st->bad_triangulation; continue; }
     EpipolarPoint ep;
-    ep.point.id = first_id + static_cast<PointId>(created->size());
-    ep.point.p_w = *p_w;
-    ep.point.source_keyframe = keyframe.id;
-    ep.point.source_level = level;
-    ep.point.source_uv = cand.uv0;
+    ep.point = MapPoint(MapPointData{first_id + static_cast<PointId>(created->size()), *p_w,
+                                     keyframe.id, cand.uv0, level});
     ep.in_keyframe = Measurement{ep.point.id, cand.uv0, level, 0.0};
     ep.in_other = Measurement{ep.point.id, uv_o, level, 0.0};
     created->push_back(ep);
@@ -224,20 +221,35 @@ void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const Pin
 
 }  // namespace
 
+void EpipolarOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "epipolar_min_depth_m", &min_depth_m, 0.01, 100.0, "m", "epipolar search: nearest depth along the ray");
+  r->bind(s, "epipolar_max_depth_m", &max_depth_m, 0.1, 1000.0, "m", "epipolar search: farthest depth along the ray");
+  r->bind(s, "epipolar_max_points", &max_points, 0, 10000, "corners", "corners without depth tried per new keyframe");
+  r->bind(s, "epipolar_min_shi_tomasi", &min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "weaker corners are not tried");
+  r->bind(s, "epipolar_weak_min_shi_tomasi", &weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "a mono keyframe (no points from depth) with few points also tries corners down to this score...");
+  r->bind(s, "epipolar_weak_until_points", &weak_until_points, 0, 100000, "points", "...until it measures this many points (0: never)");
+  r->bind(s, "epipolar_min_separation_px", &min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
+  r->bind(s, "epipolar_line_tolerance_px", &line_tolerance_px, 0.1, 20.0, "level px", "corner distance from the epipolar segment");
+  r->bind(s, "epipolar_distinctiveness", &distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
+  r->bind(s, "epipolar_min_parallax_deg", &min_parallax_deg, 0.0, 90.0, "deg", "smaller ray angles do not triangulate");
+  r->bind(s, "epipolar_max_reprojection_px", &max_reprojection_px, 0.1, 20.0, "level px", "triangulated point's error in either view");
+}
+
 std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyframe& other,
                                           const PinholeCamera& camera, const EpipolarOptions& options,
-                                          PointId first_id, EpipolarStats* stats) {
+                                          const PatchMatchOptions& matching, PointId first_id,
+                                          EpipolarStats* stats) {
   EpipolarStats local;
   EpipolarStats& st = stats ? *stats : local;
   std::vector<EpipolarPoint> created;
   std::vector<Eigen::Vector2d> taken;
-  for (const auto& [id, m] : keyframe.measurements) taken.push_back(m.uv);
-  searchCandidates(keyframe, other, camera, options,
+  for (const auto& [id, m] : keyframe.measurements()) taken.push_back(m.uv);
+  searchCandidates(keyframe, other, camera, options, matching,
                    collectCandidates(keyframe, options, options.min_shi_tomasi, INFINITY), SIZE_MAX,
                    first_id, &taken, &created, &st);
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
   if (taken.size() < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
-    searchCandidates(keyframe, other, camera, options,
+    searchCandidates(keyframe, other, camera, options, matching,
                      collectCandidates(keyframe, options, options.weak_min_shi_tomasi,
                                        options.min_shi_tomasi),
                      wanted, first_id, &taken, &created, &st);

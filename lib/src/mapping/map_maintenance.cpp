@@ -13,40 +13,33 @@ std::vector<PointId> sortedPointIds(const Map& map) {
   return ids;
 }
 
-void removeMeasurement(Map* map, KeyframeId keyframe_id, PointId point_id) {
-  const MapPoint* point = map->point(point_id);
-  if (!point) return;
-  // Map has no single-measurement removal: re-create the point with its other measurements.
-  const MapPoint copy = *point;
-  std::vector<std::pair<KeyframeId, Measurement>> keep;
-  for (KeyframeId kf : map->observers(point_id)) {
-    const Keyframe* keyframe = map->keyframe(kf);
-    if (kf == keyframe_id || !keyframe) continue;
-    const auto it = keyframe->measurements.find(point_id);
-    if (it != keyframe->measurements.end()) keep.emplace_back(kf, it->second);
-  }
-  map->removePoint(point_id);
-  map->addPoint(copy);
-  for (const auto& [kf, m] : keep) map->addMeasurement(kf, m);
-}
-
 namespace {
 
-// Measurements of the point that still exist, as keyframe ids.
-std::vector<KeyframeId> liveObservers(const Map& map, PointId pid) {
-  std::vector<KeyframeId> out;
-  for (KeyframeId kf : map.observers(pid)) {
-    const Keyframe* keyframe = map.keyframe(kf);
-    if (keyframe && keyframe->measurements.count(pid)) out.push_back(kf);
+// The newest 'count' keyframes.
+std::set<KeyframeId> newestKeyframes(const Map& map, int count) {
+  std::set<KeyframeId> newest;
+  for (auto it = map.keyframes().rbegin(); it != map.keyframes().rend(); ++it) {
+    if (static_cast<int>(newest.size()) >= count) break;
+    newest.insert(it->first);
   }
-  return out;
+  return newest;
 }
 
 }  // namespace
 
+void CullOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "min_good_measurements", &min_good_measurements, 1, 100, "measurements",
+          "points with fewer good measurements are culled");
+  r->bind(s, "keep_source_only_keyframes", &keep_source_only_keyframes, 0, 1000, "keyframes",
+          "source-only points survive while their keyframe is this recent");
+  r->bind(s, "max_outlier_fraction", &max_outlier_fraction, 0.0, 1.0, "-",
+          "points with a larger share of outlier measurements are culled");
+}
+
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
-                   const std::set<KeyframeId>& recent_keyframes, const CullOptions& options) {
+                   const CullOptions& options) {
   CullResult result;
+  const std::set<KeyframeId> recent_keyframes = newestKeyframes(*map, options.keep_source_only_keyframes);
   std::set<PointId> removed;
   auto remove = [&](PointId pid) {
     map->removePoint(pid);
@@ -58,7 +51,7 @@ CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2
   for (const auto& [pid, count] : flagged) {
     const MapPoint* point = map->point(pid);
     if (!point) continue;
-    const size_t total = liveObservers(*map, pid).size();
+    const size_t total = map->observers(pid).size();
     const bool source_bad = pending_2d_outliers->count({pid, point->source_keyframe}) > 0;
     if (source_bad || count > options.max_outlier_fraction * static_cast<double>(total)) remove(pid);
   }
@@ -66,14 +59,14 @@ CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2
   for (const auto& [pid, kf] : *pending_2d_outliers) {
     if (removed.count(pid) || !map->point(pid)) continue;
     const Keyframe* keyframe = map->keyframe(kf);
-    if (!keyframe || !keyframe->measurements.count(pid)) continue;
-    removeMeasurement(map, kf, pid);
+    if (!keyframe || !keyframe->measurements().count(pid)) continue;
+    map->removeMeasurement(kf, pid);
     ++result.removed_measurements;
   }
   pending_2d_outliers->clear();
   // 3. Points with too few good measurements.
   for (PointId pid : sortedPointIds(*map)) {
-    const std::vector<KeyframeId> seen = liveObservers(*map, pid);
+    const std::vector<KeyframeId> seen = map->observers(pid);
     if (static_cast<int>(seen.size()) >= options.min_good_measurements) continue;
     const MapPoint* point = map->point(pid);
     const bool recent_source_only = seen.size() == 1 && seen[0] == point->source_keyframe &&

@@ -18,47 +18,6 @@
 
 namespace rgbdslam {
 
-void MapperOptions::bind(OptionRegistry* r) {
-  const std::string m = "mapper";
-  r->bind(m, "local_ba_neighbours", &local_ba_neighbours, 0, 100, "keyframes", "nearest keyframes optimised with a new one in local BA");
-  r->bind(m, "global_ba_every", &global_ba_every, 1, 1000, "keyframes", "run global BA after this many new keyframes");
-  r->bind(m, "max_global_ba_keyframes", &max_global_ba_keyframes, 2, 100000, "keyframes", "above this, global BA optimises only the newest ones");
-  r->bind(m, "epipolar_min_depth_m", &epipolar_min_depth_m, 0.01, 100.0, "m", "epipolar search: nearest depth along the ray");
-  r->bind(m, "epipolar_max_depth_m", &epipolar_max_depth_m, 0.1, 1000.0, "m", "epipolar search: farthest depth along the ray");
-  r->bind(m, "epipolar_partner_distance_ratio", &epipolar_partner_distance_ratio, 0.0, 10.0, "-", "epipolar partner: the farthest keyframe within this times the median depth (0: the nearest)");
-  r->bind(m, "epipolar_partner_max_angle_deg", &epipolar_partner_max_angle_deg, 0.0, 180.0, "deg", "...whose optical axis is within this angle of the new keyframe's");
-  r->bind(m, "epipolar_max_points", &epipolar_max_points, 0, 10000, "corners", "corners without depth tried per new keyframe");
-  r->bind(m, "epipolar_partners_mono", &epipolar_partners_mono, 1, 100, "keyframes", "mono keyframes search against this many partners (the chosen one, then the nearest others within the angle)");
-  r->bind(m, "epipolar_min_shi_tomasi", &epipolar_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "weaker corners are not tried");
-  r->bind(m, "epipolar_weak_min_shi_tomasi", &epipolar_weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2", "a mono keyframe (no points from depth) with few points also tries corners down to this score...");
-  r->bind(m, "epipolar_weak_until_points", &epipolar_weak_until_points, 0, 100000, "points", "...until it measures this many points (0: never)");
-  r->bind(m, "epipolar_min_separation_px", &epipolar_min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
-  r->bind(m, "epipolar_line_tolerance_px", &epipolar_line_tolerance_px, 0.1, 20.0, "level px", "corner distance from the epipolar segment");
-  r->bind(m, "epipolar_distinctiveness", &epipolar_distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
-  r->bind(m, "epipolar_min_parallax_deg", &epipolar_min_parallax_deg, 0.0, 90.0, "deg", "smaller ray angles do not triangulate");
-  r->bind(m, "epipolar_max_reprojection_px", &epipolar_max_reprojection_px, 0.1, 20.0, "level px", "triangulated point's error in either view");
-  r->bind(m, "max_zmssd_per_pixel", &max_zmssd_per_pixel, 1, 65025, "grey^2", "patch acceptance (ZMSSD / 64) for epipolar search and re-finding");
-  r->bind(m, "max_zmssd_flat_ratio", &max_zmssd_flat_ratio, 0.0, 2.0, "-", "...and below this times the template's zero-mean energy, which a textureless patch exceeds (0: off)");
-  r->bind(m, "refind_search_radius_px", &refind_search_radius_px, 1, 50, "level px", "re-finding: search radius around the prediction");
-  r->bind(m, "min_good_measurements", &min_good_measurements, 1, 100, "measurements", "points with fewer good measurements are culled");
-  r->bind(m, "keep_source_only_keyframes", &keep_source_only_keyframes, 0, 1000, "keyframes", "source-only points survive while their keyframe is this recent");
-  r->bind(m, "max_outlier_fraction", &max_outlier_fraction, 0.0, 1.0, "-", "points with a larger share of outlier measurements are culled");
-  r->bind(m, "min_depth_m", &keyframe_build.min_depth_m, 0.0, 100.0, "m", "keyframe depth readings nearer than this are invalid");
-  r->bind(m, "max_depth_m", &keyframe_build.max_depth_m, 0.1, 100.0, "m", "keyframe depth readings farther than this are invalid");
-  const std::string b = "bundle_adjustment";
-  r->bind(b, "sigma_2d_k", &ba.sigma_2d_k, 1e-3, 100.0, "px", "2-D noise: sigma = k * 2^level");
-  r->bind(b, "depth_sigma_a", &ba.depth_sigma_a, 1e-6, 1.0, "1/m", "depth noise: sigma = a * d^2");
-  r->bind(b, "tukey_c", &ba.tukey_c, 0.1, 100.0, "sigma_T", "Tukey biweight cut-off");
-  r->bind(b, "min_sigma_t", &ba.min_sigma_t, 1e-3, 100.0, "sigma", "floor of the robust scale sigma_T");
-  r->bind(b, "max_iterations", &ba.max_iterations, 1, 1000, "iterations", "Levenberg-Marquardt iterations per solve");
-  r->bind(b, "robust_rounds", &ba.robust_rounds, 1, 20, "rounds", "IRLS passes (estimate sigma_T, solve)");
-  r->bind(b, "function_tolerance", &ba.function_tolerance, 0.0, 1.0, "-", "stop when |cost change| / cost is below");
-  r->bind(b, "gradient_tolerance", &ba.gradient_tolerance, 0.0, 1.0, "-", "stop when max |gradient| is below");
-  r->bind(b, "parameter_tolerance", &ba.parameter_tolerance, 0.0, 1.0, "-", "stop when |step| / |x| is below");
-  r->bind(b, "num_threads", &ba.num_threads, 1, 64, "threads", "Ceres threads");
-  r->bind(b, "dense_schur_max_poses", &ba.dense_schur_max_poses, 1, 10000, "poses", "automatic solver: dense Schur up to this many free poses");
-}
-
 const char* toString(MapperResult::Status status) {
   switch (status) {
     case MapperResult::Status::kIntegrated: return "integrated";
@@ -85,7 +44,7 @@ bool usableResult(const BaResult& r) {
 void updateMedianDepth(const Map& map, Keyframe* kf) {
   std::vector<double> depths;
   const SE3 T_c_w = kf->T_c_w();
-  for (const auto& [pid, m] : kf->measurements) {
+  for (const auto& [pid, m] : kf->measurements()) {
     if (const MapPoint* p = map.point(pid)) {
       const double z = (T_c_w * p->p_w).z();
       if (z > 0) depths.push_back(z);
@@ -111,7 +70,7 @@ class Mapper::Impl {
  private:
   static BaOptions baOptions(const MapperOptions& options, SlamMode mode) {
     BaOptions ba = options.ba;
-    ba.use_depth = mode == SlamMode::kDepthBa;
+    ba.use_depth = ba.use_depth && mode == SlamMode::kDepthBa;
     return ba;
   }
   std::string checkKeyframe(const KeyframeData& data) const;
@@ -127,7 +86,6 @@ class Mapper::Impl {
   std::set<KeyframeId> globalWindow() const;
   bool refindNewPoints(const std::atomic<bool>* interrupt);
   void cull();
-  std::set<KeyframeId> recentKeyframes() const;
 
   PinholeCamera camera_;
   MapperOptions options_;
@@ -169,7 +127,7 @@ MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atom
   result.local_ba_ms = msSince(ba_start);
   updateMedianDepth(map_, map_.keyframe(data.id));
   changes_.keyframes.insert(data.id);
-  global_ba_needed_ = global_ba_needed_ || ++keyframes_since_global_ba_ >= options_.global_ba_every;
+  global_ba_needed_ = global_ba_needed_ || ++keyframes_since_global_ba_ >= options_.ba_windows.global_ba_every;
   cull_needed_ = true;
   result.status = MapperResult::Status::kIntegrated;
   return result;
@@ -180,19 +138,14 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = data.T_w_c;
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
   Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, options_.keyframe_build));
-  for (const MapPointData& p : data.new_points) {
-    MapPoint point;
-    point.id = p.id, point.p_w = p.p_w, point.source_keyframe = p.source_keyframe;
-    point.source_level = p.level, point.source_uv = p.uv;
-    addPoint(point);
-  }
+  for (const MapPointData& p : data.new_points) addPoint(MapPoint(p));
   for (const Measurement& m : data.measurements) {
     if (map_.point(m.point_id)) addMeasurement(kf->id, m);
     else ++result->dropped_measurements;
   }
   // A provisional point whose source measurement was not sent gets it from its patch.
   for (const MapPointData& p : data.new_points) {
-    if (p.source_keyframe == kf->id && !kf->measurements.count(p.id)) {
+    if (p.source_keyframe == kf->id && !kf->measurements().count(p.id)) {
       const auto d = kf->depthAt(p.uv);
       addMeasurement(kf->id, Measurement{p.id, p.uv, p.level, d ? *d : 0.0});
     }
@@ -224,9 +177,9 @@ KeyframeId Mapper::Impl::epipolarPartner(const Keyframe& kf) const {
       break;
     }
   }
-  if (nearest < 0 || options_.epipolar_partner_distance_ratio <= 0.0) return nearest;
-  const double max_distance = options_.epipolar_partner_distance_ratio * kf.median_depth;
-  const double min_cos = std::cos(options_.epipolar_partner_max_angle_deg * M_PI / 180.0);
+  if (nearest < 0 || options_.epipolar_partners.distance_ratio <= 0.0) return nearest;
+  const double max_distance = options_.epipolar_partners.distance_ratio * kf.median_depth;
+  const double min_cos = std::cos(options_.epipolar_partners.max_angle_deg * M_PI / 180.0);
   const Vec3 axis = kf.T_w_c.rotationMatrix().col(2);
   KeyframeId best = nearest;
   double best_distance =
@@ -250,9 +203,9 @@ std::vector<KeyframeId> Mapper::Impl::epipolarPartners(const Keyframe& kf) const
   if (first < 0) return partners;
   partners.push_back(first);
   if (depthPointsAllowed(mode_, kf.id)) return partners;
-  const double min_cos = std::cos(options_.epipolar_partner_max_angle_deg * M_PI / 180.0);
+  const double min_cos = std::cos(options_.epipolar_partners.max_angle_deg * M_PI / 180.0);
   const Vec3 axis = kf.T_w_c.rotationMatrix().col(2);
-  const size_t wanted = static_cast<size_t>(options_.epipolar_partners_mono);
+  const size_t wanted = static_cast<size_t>(options_.epipolar_partners.partners_mono);
   for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, map_.numKeyframes())) {
     if (partners.size() >= wanted) break;
     if (id == kf.id || id == first) continue;
@@ -263,7 +216,7 @@ std::vector<KeyframeId> Mapper::Impl::epipolarPartners(const Keyframe& kf) const
 }
 
 int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
-  if (options_.epipolar_max_points <= 0) return 0;
+  if (options_.epipolar.max_points <= 0) return 0;
   int created = 0;
   for (KeyframeId other_id : epipolarPartners(kf)) {
     created += addEpipolarPointsWith(kf, *map_.keyframe(other_id), created);
@@ -274,23 +227,13 @@ int Mapper::Impl::addEpipolarPoints(const Keyframe& kf) {
 // Points of 'kf' triangulated against 'other'; ids continue after 'created_before'.
 int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& other,
                                         int created_before) {
-  EpipolarOptions eo;
-  eo.min_depth_m = options_.epipolar_min_depth_m, eo.max_depth_m = options_.epipolar_max_depth_m;
-  eo.max_points = options_.epipolar_max_points, eo.min_shi_tomasi = options_.epipolar_min_shi_tomasi;
-  eo.weak_min_shi_tomasi = options_.epipolar_weak_min_shi_tomasi;
+  EpipolarOptions eo = options_.epipolar;
   // Weak corners only where every point must come from epipolar search (mono): in the depth
   // modes the keyframe's points from depth already took the weak corners that have depth.
-  eo.weak_until_points = depthPointsAllowed(mode_, kf.id) ? 0 : options_.epipolar_weak_until_points;
-  eo.min_separation_px = options_.epipolar_min_separation_px;
-  eo.line_tolerance_px = options_.epipolar_line_tolerance_px;
-  eo.distinctiveness = options_.epipolar_distinctiveness;
-  eo.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
-  eo.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
-  eo.min_parallax_deg = options_.epipolar_min_parallax_deg;
-  eo.max_reprojection_px = options_.epipolar_max_reprojection_px;
+  if (depthPointsAllowed(mode_, kf.id)) eo.weak_until_points = 0;
   eo.skip_corners_with_depth = depthPointsAllowed(mode_, kf.id);
-  const PointId first_id = kf.id * kPointsPerKeyframe + kPointsPerKeyframe / 2 + created_before;
-  const auto created = epipolarSearch(kf, other, camera_, eo, first_id);
+  const PointId first_id = mapperPointId(kf.id, created_before);
+  const auto created = epipolarSearch(kf, other, camera_, eo, options_.matching, first_id);
   for (const EpipolarPoint& ep : created) {
     addPoint(ep.point);
     Measurement in_kf = ep.in_keyframe, in_other = ep.in_other;
@@ -304,8 +247,9 @@ int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& othe
 
 std::set<KeyframeId> Mapper::Impl::localWindow(const Keyframe& kf) const {
   std::set<KeyframeId> window{kf.id};
-  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, options_.local_ba_neighbours + 1)) {
-    if (window.size() > static_cast<size_t>(options_.local_ba_neighbours)) break;
+  const int neighbours = options_.ba_windows.local_ba_neighbours;
+  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, neighbours + 1)) {
+    if (window.size() > static_cast<size_t>(neighbours)) break;
     window.insert(id);
   }
   window.erase(0);
@@ -317,7 +261,9 @@ std::set<KeyframeId> Mapper::Impl::globalWindow() const {
   for (const auto& [id, kf] : map_.keyframes()) {
     if (id != 0) window.insert(id);
   }
-  while (static_cast<int>(window.size()) > options_.max_global_ba_keyframes) window.erase(window.begin());
+  while (static_cast<int>(window.size()) > options_.ba_windows.max_global_ba_keyframes) {
+    window.erase(window.begin());
+  }
   return window;
 }
 
@@ -336,10 +282,6 @@ BaResult Mapper::Impl::runBa(const std::set<KeyframeId>& free_keyframes, const s
 }
 
 bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
-  RefindOptions ro;
-  ro.search_radius_px = options_.refind_search_radius_px;
-  ro.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
-  ro.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
   bool added = false;
   while (!refind_queue_.empty() && !interrupted(interrupt)) {
     const PointId pid = refind_queue_.front();
@@ -348,8 +290,8 @@ bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
     const Keyframe* source = point ? map_.keyframe(point->source_keyframe) : nullptr;
     if (!source) continue;
     for (const auto& [kf_id, kf] : map_.keyframes()) {
-      if (kf->measurements.count(pid)) continue;
-      auto m = findPointInKeyframe(*point, *source, *kf, camera_, ro);
+      if (kf->measurements().count(pid)) continue;
+      auto m = findPointInKeyframe(*point, *source, *kf, camera_, options_.refind, options_.matching);
       if (!m) continue;
       if (const auto d = kf->depthAt(m->uv)) m->depth = *d;
       addMeasurement(kf_id, *m);
@@ -359,18 +301,8 @@ bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
   return added;
 }
 
-std::set<KeyframeId> Mapper::Impl::recentKeyframes() const {
-  std::set<KeyframeId> recent;
-  for (auto it = map_.keyframes().rbegin(); it != map_.keyframes().rend(); ++it) {
-    if (static_cast<int>(recent.size()) >= options_.keep_source_only_keyframes) break;
-    recent.insert(it->first);
-  }
-  return recent;
-}
-
 void Mapper::Impl::cull() {
-  const CullOptions co{options_.min_good_measurements, options_.max_outlier_fraction};
-  const CullResult culled = cullMap(&map_, &pending_outliers_, recentKeyframes(), co);
+  const CullResult culled = cullMap(&map_, &pending_outliers_, options_.cull);
   for (PointId pid : culled.removed_points) {
     changes_.removed_points.insert(pid);
     changes_.points.erase(pid);

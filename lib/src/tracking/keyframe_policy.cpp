@@ -12,6 +12,24 @@ double rotationAngleDeg(const SE3& a, const SE3& b) {
 
 }  // namespace
 
+void KeyframePolicyOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "min_frames_between_keyframes", &min_frames_between_keyframes, 0, 100000, "frames",
+          "frames since the last keyframe before another");
+  r->bind(s, "keyframe_distance_ratio", &distance_ratio, 0.0, 10.0, "",
+          "new keyframe when every keyframe is farther than this times the median depth...");
+  r->bind(s, "keyframe_angle_deg", &angle_deg, 0.0, 180.0, "deg", "...or rotated by more than this");
+  r->bind(s, "keyframe_few_points", &few_points, 0, 100000, "points",
+          "fewer points found, and the mode makes points from depth: a keyframe is due "
+          "whatever the distance (0: off)");
+  r->bind(s, "keyframe_few_points_min_frames", &few_points_min_frames, 0, 100000, "frames",
+          "...after at least this many frames since the last keyframe");
+  r->bind(s, "keyframe_few_points_mono", &few_points_no_depth, 0, 100000, "points",
+          "mono (no points from depth): fewer points found gives a keyframe whatever the "
+          "distance (0: off)");
+  r->bind(s, "keyframe_few_points_mono_min_frames", &few_points_no_depth_min_frames, 0, 100000,
+          "frames", "...after at least this many frames since the last keyframe");
+}
+
 bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
                        const KeyframePolicyOptions& options) {
   if (!input.tracking_good) return false;

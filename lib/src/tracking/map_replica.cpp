@@ -66,12 +66,7 @@ bool MapReplica::apply(const MapUpdate& update) {
       unknown = true;
       continue;
     }
-    MapPoint point;
-    point.id = p.id;
-    point.p_w = p.p_w;
-    point.source_keyframe = p.source_keyframe;
-    point.source_level = p.level;
-    point.source_uv = p.uv;
+    const MapPoint point(p);
     const MapPoint* before = map_.point(p.id);
     const bool same_patch = before && before->source_keyframe == p.source_keyframe &&
                             before->source_level == p.level && before->source_uv == p.uv;

@@ -96,8 +96,8 @@ namespace {
 int acceptanceFor(const Patch& patch, const PointSearchOptions& options) {
   const double energy =
       patch.sum_sq - static_cast<double>(patch.sum) * patch.sum / kPatchArea;
-  const int accepted =
-      std::max(options.max_zmssd, static_cast<int>(options.max_zmssd_energy_ratio * energy));
+  const int accepted = std::max(options.max_zmssd_per_pixel * kPatchArea,
+                                static_cast<int>(options.max_zmssd_energy_ratio * energy));
   if (options.max_zmssd_flat_ratio <= 0.0) return accepted;
   return std::min(accepted, static_cast<int>(options.max_zmssd_flat_ratio * energy));
 }
@@ -129,8 +129,28 @@ std::optional<cv::Point2i> searchDense(const Patch& patch, const cv::Mat& image,
 
 }  // namespace
 
+void ProjectionOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "image_margin_px", &margin_px, 0, 100, "px",
+          "projected points closer than this to the image border are not searched");
+}
+
+void PointSearchOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "max_zmssd_per_pixel", &max_zmssd_per_pixel, 1, 65025, "grey^2",
+          "patch match accepted when ZMSSD / 64 is below this");
+  r->bind(s, "max_zmssd_energy_ratio", &max_zmssd_energy_ratio, 0.0, 2.0, "",
+          "...or when ZMSSD is below this times the template's zero-mean energy (0: off)");
+  r->bind(s, "max_zmssd_flat_ratio", &max_zmssd_flat_ratio, 0.0, 2.0, "",
+          "...and in any case only when ZMSSD is below this times the template's zero-mean "
+          "energy, which a textureless image patch exceeds (0: off)");
+  r->bind(s, "search_dense_fallback", &dense_fallback,
+          "no FAST corner in the search radius matches: test every pixel in it");
+  r->bind(s, "patch_cache_tolerance", &patch_cache_tolerance, 0.0, 1.0, "",
+          "re-warp a cached patch when an entry of its warp matrix changed by more");
+}
+
 int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
-                 const std::vector<LevelCorners>& corners, const PointSearchOptions& options) {
+                 const std::vector<LevelCorners>& corners, int radius_px,
+                 const PointSearchOptions& options) {
   int found = 0;
   for (PointSlot* slot : slots) {
     slot->found = false;
@@ -145,9 +165,9 @@ int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyram
     const cv::Mat& image = pyramid.levels[level];
     const int max_zmssd = acceptanceFor(slot->patch, options);
     auto match = searchPatch(slot->patch, image, corners[level], predicted_level,
-                             options.radius_px, max_zmssd);
+                             radius_px, max_zmssd);
     if (!match && options.dense_fallback) {
-      match = searchDense(slot->patch, image, predicted_level, options.radius_px, max_zmssd);
+      match = searchDense(slot->patch, image, predicted_level, radius_px, max_zmssd);
     }
     if (!match) continue;
     Eigen::Vector2d position(match->x, match->y);

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {
@@ -38,7 +38,7 @@ void linearise(const PinholeCamera& camera, const SE3& T_c_w,
   for (size_t i = 0; i < n; ++i) {
     const PoseObservation& obs = observations[i];
     if (reprojectionResidual(camera, T_c_w, obs.p_w, obs.uv, &lin->r2[i], &lin->J2[i])) {
-      const double inv_sigma = 1.0 / sigma2d(obs.level);
+      const double inv_sigma = 1.0 / options.noise.sigma2d(obs.level);
       lin->r2[i] *= inv_sigma;
       lin->J2[i] *= inv_sigma;
       lin->valid2[i] = 1;
@@ -46,7 +46,7 @@ void linearise(const PinholeCamera& camera, const SE3& T_c_w,
     }
     if (options.use_depth && obs.depth > 0.0 &&
         depthResidual(T_c_w, obs.p_w, obs.depth, &lin->rd[i], &lin->Jd[i])) {
-      const double inv_sigma = 1.0 / sigmaDepth(obs.depth, options.depth_sigma_coefficient);
+      const double inv_sigma = 1.0 / options.noise.sigmaDepth(obs.depth);
       lin->rd[i] *= inv_sigma;
       lin->Jd[i] *= inv_sigma;
       lin->validd[i] = 1;
@@ -56,6 +56,23 @@ void linearise(const PinholeCamera& camera, const SE3& T_c_w,
 }
 
 }  // namespace
+
+void PoseOptimizerOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "gauss_newton_iterations", &iterations, 1, 100, "iterations",
+          "pose Gauss-Newton iterations per stage");
+  r->bind(s, "tukey_c", &tukey_c, 1.0, 20.0, "sigmas", "Tukey biweight cut-off");
+  r->bind(s, "min_robust_sigma", &min_robust_sigma, 0.01, 10.0, "sigmas",
+          "floor of the robust scale estimated from the median error");
+  r->bind(s, "max_robust_sigma", &max_robust_sigma, 0.0, 10.0, "sigmas",
+          "cap of the robust scale after the free iterations, so many wrong matches cannot "
+          "widen the cut-off (0: no cap)");
+  r->bind(s, "free_scale_iterations", &free_scale_iterations, 0, 100, "iterations",
+          "pose iterations per stage with the median scale uncapped, before the cap applies");
+  r->bind(s, "use_depth_in_pose", &use_depth,
+          "add depth residuals of tracked corners with a depth reading to the pose (never in "
+          "mono, where depth serves only the first frame)");
+  noise.bind(r);
+}
 
 double robustSigmaSquared(std::vector<double>* e2, double floor_sigma, double cap_sigma) {
   const double floor2 = floor_sigma * floor_sigma;

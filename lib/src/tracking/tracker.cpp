@@ -21,10 +21,6 @@ namespace {
 
 using TrackStatus = TrackResult::Status;
 
-// Provisional points of one keyframe use ids below this offset within its id block; the
-// mapper's own points use the upper half.
-constexpr int64_t kProvisionalPointsPerKeyframe = kPointsPerKeyframe / 2;
-
 // The result of tracking one frame from a start pose.
 struct Attempt {
   SE3 T_c_w;
@@ -54,15 +50,16 @@ double median(std::vector<double>* values) {
 }  // namespace
 
 bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality) {
-  return options.retry_without_coarse &&
-         (quality < options.quality_good || quality < options.retry_quality_ratio * last_quality);
+  return options.coarse.retry_without &&
+         (quality < options.quality.good || quality < options.coarse.retry_quality_ratio * last_quality);
 }
 
 class Tracker::Impl {
  public:
   Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
-      : camera_(camera), options_(options), mode_(mode), map_id_(map_id),
-        rng_(static_cast<uint32_t>(options.random_seed)), replica_(camera) {}
+      : camera_(camera), options_(options), pose_options_(poseOptions(options, mode)),
+        mode_(mode), map_id_(map_id), rng_(static_cast<uint32_t>(options.random_seed)),
+        replica_(camera) {}
 
   TrackResult track(const RgbdFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
@@ -71,7 +68,6 @@ class Tracker::Impl {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     result.pose.utime = frame.utime;
     result.pose.seq = frame.seq;
-    result.pose.latency_ms = result.track_ms;
     return result;
   }
 
@@ -114,19 +110,24 @@ class Tracker::Impl {
   bool poseFixed(const PoseUncertainty& uncertainty) const;
   bool constrainsPose(const std::vector<NewPoint>& points) const;
   bool isReliable(const MapPoint& point) const {
-    return point.times_projected < options_.unreliable_after_searches ||
-           point.times_found >= options_.unreliable_found_ratio * point.times_projected;
+    return point.times_projected < options_.quality.unreliable_after_searches ||
+           point.times_found >= options_.quality.unreliable_found_ratio * point.times_projected;
   }
   TrackResult accept(const Attempt& attempt, const RgbdFrame& frame, TrackingState state);
   KeyframeData addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
                            std::vector<Measurement> measurements);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
   double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
-  PoseOptimizerOptions poseOptions() const;
-  bool depthInPose() const { return options_.use_depth_in_pose && depthInTracking(mode_); }
+  // The pose fit's options: depth residuals only where the mode tracks with depth.
+  static PoseOptimizerOptions poseOptions(const TrackerOptions& options, SlamMode mode) {
+    PoseOptimizerOptions pose = options.pose;
+    pose.use_depth = pose.use_depth && depthInTracking(mode);
+    return pose;
+  }
 
   PinholeCamera camera_;
   TrackerOptions options_;
+  PoseOptimizerOptions pose_options_;
   SlamMode mode_;
   int64_t map_id_;
   std::mt19937 rng_;
@@ -212,7 +213,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   data.depth_scale = frame.depth_scale;
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
   const std::vector<NewPoint> points =
-      createPointsFromDepth(*keyframe, camera_, options_.depth_points, 0);
+      createPointsFromDepth(*keyframe, camera_, options_.depth_points, provisionalPointId(0, 0));
   if (static_cast<int>(points.size()) < options_.init_min_points) {
     result.status = TrackResult::Status::kNotInitialised;
     result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
@@ -228,7 +229,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   }
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
-    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, 0)) break;
     replica_.addProvisionalPoint(0, np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
@@ -248,8 +249,8 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
 }
 
 SE3 Tracker::Impl::predictPose() const {
-  Vec6 xi = options_.velocity_damping * velocity_;
-  if (options_.use_sbi_rotation && have_previous_sbi_) {
+  Vec6 xi = options_.motion.velocity_damping * velocity_;
+  if (options_.motion.use_sbi_rotation && have_previous_sbi_) {
     // PTAM: the SBI rotation replaces the rotational velocity, and sideways translation
     // (which the SBI alignment has already explained as rotation) is dropped.
     const SE3 T_old_new =
@@ -269,7 +270,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // searches near that pose, cannot bring it back. A poor result after a coarse stage is
   // therefore compared with the fine stage alone from the prediction, and the attempt that
   // explains more of its searched points is kept. So is one whose quality dropped sharply
-  // from the last frame's (TrackerOptions::retry_quality_ratio).
+  // from the last frame's (CoarseStageOptions::retry_quality_ratio).
   if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
     attempt = betterOf(attempt, predicted, frame, Coarse::kNever);
   }
@@ -286,7 +287,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
     return result;
   }
   const TrackingState state =
-      attempt.quality >= options_.quality_good ? TrackingState::kTracking : TrackingState::kDodgy;
+      attempt.quality >= options_.quality.good ? TrackingState::kTracking : TrackingState::kDodgy;
   return accept(attempt, frame, state);
 }
 
@@ -305,7 +306,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // 0.14 of the points found without it, 0.97 with it, two frames after a loss in the
     // room), and the attempt that explains more of its searched points is kept.
     Attempt attempt = trackFrom(start, frame, near_last ? Coarse::kNever : Coarse::kAlways);
-    if (near_last && (isLost(attempt) || attempt.quality < options_.quality_good)) {
+    if (near_last && (isLost(attempt) || attempt.quality < options_.quality.good)) {
       attempt = betterOf(attempt, start, frame, Coarse::kAlways);
     }
     // A keyframe's view is a guess from the small blurry image: only a good result proves
@@ -313,7 +314,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // fixed): where many points are hidden or unmatchable for a stretch (the corridor's
     // glass cabinets close by) the quality stays below good although the pose is right,
     // and a tracker that lost such a stretch once would otherwise never come back.
-    if (isLost(attempt) || (!near_last && attempt.quality < options_.quality_good)) continue;
+    if (isLost(attempt) || (!near_last && attempt.quality < options_.quality.good)) continue;
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
@@ -328,7 +329,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
 // of the visible points (projected at the start pose, slot->uv) from where the last pose
 // puts them.
 bool Tracker::Impl::coarseWanted(const SE3& T_c_w_start) {
-  if (options_.coarse_min_motion_px <= 0.0 || visible_.empty()) return true;
+  if (options_.coarse.min_motion_px <= 0.0 || visible_.empty()) return true;
   if (replica_.map().numKeyframes() == 0) return true;
   const SE3 T_last_start = T_c_w_ * T_c_w_start.inverse();
   displacements_.clear();
@@ -337,17 +338,17 @@ bool Tracker::Impl::coarseWanted(const SE3& T_c_w_start) {
     if (uv_last) displacements_.push_back((*uv_last - slot->uv).norm());
   }
   if (displacements_.empty()) return true;
-  return median(&displacements_) >= options_.coarse_min_motion_px;
+  return median(&displacements_) >= options_.coarse.min_motion_px;
 }
 
 bool Tracker::Impl::isLost(const Attempt& attempt) const {
-  return attempt.searched == 0 || attempt.quality < options_.quality_lost ||
-         attempt.found < options_.min_points_tracked || !poseFixed(attempt.uncertainty);
+  return attempt.searched == 0 || attempt.quality < options_.quality.lost ||
+         attempt.found < options_.quality.min_points_tracked || !poseFixed(attempt.uncertainty);
 }
 
 bool Tracker::Impl::poseFixed(const PoseUncertainty& uncertainty) const {
-  return uncertainty.translation_m <= options_.max_pose_sigma_m &&
-         uncertainty.rotation_rad <= options_.max_pose_sigma_deg * M_PI / 180.0;
+  return uncertainty.translation_m <= options_.quality.max_pose_sigma_m &&
+         uncertainty.rotation_rad <= options_.quality.max_pose_sigma_deg * M_PI / 180.0;
 }
 
 // Whether new points from depth, measured in the frame that would become keyframe 0 (world
@@ -355,11 +356,11 @@ bool Tracker::Impl::poseFixed(const PoseUncertainty& uncertainty) const {
 bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points) const {
   std::vector<PoseObservation> observations;
   for (const NewPoint& np : points) {
-    if (np.point.id >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, 0)) break;
     observations.push_back({np.point.p_w, np.measurement.uv, np.measurement.level,
-                            options_.use_depth_in_pose ? np.measurement.depth : 0.0});
+                            options_.pose.use_depth ? np.measurement.depth : 0.0});
   }
-  const PoseOptimizerResult fit = optimisePose(camera_, SE3(), observations, poseOptions());
+  const PoseOptimizerResult fit = optimisePose(camera_, SE3(), observations, pose_options_);
   return fit.ok && poseFixed(poseUncertainty(fit.information));
 }
 
@@ -390,12 +391,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
                                   depthPointsAllowed(mode_, next_keyframe_id_)};
-  const KeyframePolicyOptions policy{
-      options_.min_frames_between_keyframes, options_.keyframe_distance_ratio,
-      options_.keyframe_angle_deg, options_.keyframe_few_points,
-      options_.keyframe_few_points_min_frames, options_.keyframe_few_points_mono,
-      options_.keyframe_few_points_mono_min_frames};
-  if (shouldAddKeyframe(replica_.map(), input, policy)) {
+  if (shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
   return result;
@@ -439,20 +435,20 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
   projectAll(T_c_w);
   stage_.clear();
   for (PointSlot* slot : visible_) {
-    if (slot->search_level >= options_.coarse_min_level) stage_.push_back(slot);
+    if (slot->search_level >= options_.coarse.min_level) stage_.push_back(slot);
   }
   bool did_coarse = false;
-  if (coarse != Coarse::kNever && static_cast<int>(stage_.size()) >= options_.coarse_min_points &&
+  if (coarse != Coarse::kNever && static_cast<int>(stage_.size()) >= options_.coarse.min_points &&
       (coarse == Coarse::kAlways || coarseWanted(T_c_w_start))) {
     did_coarse = true;
-    selectSubset(&stage_, options_.coarse_max_points);
-    T_c_w = runStage(stage_, T_c_w, options_.coarse_radius_px, frame, false);
+    selectSubset(&stage_, options_.coarse.max_points);
+    T_c_w = runStage(stage_, T_c_w, options_.coarse.radius_px, frame, false);
     for (PointSlot* slot : stage_) slot->searched = slot->found = false;
     projectAll(T_c_w);
   }
   stage_ = visible_;
-  selectSubset(&stage_, options_.fine_max_points);
-  T_c_w = runStage(stage_, T_c_w, options_.fine_radius_px, frame, true);
+  selectSubset(&stage_, options_.fine.max_points);
+  T_c_w = runStage(stage_, T_c_w, options_.fine.radius_px, frame, true);
 
   Attempt attempt;
   attempt.T_c_w = T_c_w;
@@ -480,10 +476,9 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
 
 void Tracker::Impl::projectAll(const SE3& T_c_w) {
   makeKeyframeViews(replica_.map(), T_c_w, &views_);
-  const ProjectionOptions projection{options_.image_margin_px};
   visible_.clear();
   for (PointSlot& slot : replica_.slots()) {
-    if (projectPoint(camera_, T_c_w, views_, projection, &slot)) visible_.push_back(&slot);
+    if (projectPoint(camera_, T_c_w, views_, options_.projection, &slot)) visible_.push_back(&slot);
   }
 }
 
@@ -491,24 +486,17 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
 // mark_inliers, found points that the robust fit rejected are marked not found.
 SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c_w, int radius_px,
                             const RgbdFrame& frame, bool mark_inliers) {
-  PointSearchOptions search;
-  search.radius_px = radius_px;
-  search.max_zmssd = options_.max_zmssd_per_pixel * kPatchArea;
-  search.max_zmssd_energy_ratio = options_.max_zmssd_energy_ratio;
-  search.max_zmssd_flat_ratio = options_.max_zmssd_flat_ratio;
-  search.dense_fallback = options_.search_dense_fallback;
-  search.patch_cache_tolerance = options_.patch_cache_tolerance;
-  searchPoints(slots, pyramid_, corners_, search);
+  searchPoints(slots, pyramid_, corners_, radius_px, options_.search);
   observations_.clear();
   std::vector<PointSlot*> found;
   for (PointSlot* slot : slots) {
     if (!slot->found) continue;
-    const double depth = depthInPose() ? depthAt(frame, slot->found_uv) : 0.0;
+    const double depth = pose_options_.use_depth ? depthAt(frame, slot->found_uv) : 0.0;
     observations_.push_back({slot->point->p_w, slot->found_uv, slot->found_level, depth});
     found.push_back(slot);
   }
   const PoseOptimizerResult fit =
-      optimisePose(camera_, T_c_w, observations_, poseOptions(), &inliers_);
+      optimisePose(camera_, T_c_w, observations_, pose_options_, &inliers_);
   if (mark_inliers) fine_information_ = fit.information;
   if (!fit.ok) return T_c_w;
   if (mark_inliers) {
@@ -525,18 +513,6 @@ void Tracker::Impl::selectSubset(std::vector<PointSlot*>* slots, int max_count) 
     std::swap((*slots)[static_cast<size_t>(i)], (*slots)[pick(rng_)]);
   }
   slots->resize(static_cast<size_t>(max_count));
-}
-
-PoseOptimizerOptions Tracker::Impl::poseOptions() const {
-  PoseOptimizerOptions pose;
-  pose.iterations = options_.gauss_newton_iterations;
-  pose.tukey_c = options_.tukey_c;
-  pose.min_robust_sigma = options_.min_robust_sigma;
-  pose.max_robust_sigma = options_.max_robust_sigma;
-  pose.free_scale_iterations = options_.free_scale_iterations;
-  pose.use_depth = depthInPose();
-  pose.depth_sigma_coefficient = options_.depth_sigma_coefficient;
-  return pose;
 }
 
 double Tracker::Impl::depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const {
@@ -579,11 +555,11 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
   std::vector<NewPoint> points;
   if (depthPointsAllowed(mode_, data.id)) {
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
-                                   data.id * kPointsPerKeyframe);
+                                   provisionalPointId(data.id, 0));
   }
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
-    if (np.point.id - data.id * kPointsPerKeyframe >= kProvisionalPointsPerKeyframe) break;
+    if (!isProvisionalPointOf(np.point.id, data.id)) break;
     replica_.addProvisionalPoint(data.id, np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());

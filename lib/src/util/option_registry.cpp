@@ -1,6 +1,8 @@
 #include "rgbdslam/util/option_registry.h"
 
 #include <cerrno>
+#include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -43,7 +45,7 @@ Expected<std::string> nodeText(const cv::FileNode& node) {
 void OptionRegistry::bind(const std::string& section, const std::string& key, double* field,
                           double min, double max, const std::string& unit, const std::string& help) {
   const std::string name = section + "." + key;
-  entries_.push_back({section, key, unit, help, "number", formatDouble(*field),
+  add({section, key, unit, help, "number", formatDouble(*field),
                       [=](const std::string& text) -> Status {
                         auto v = parseDouble(text);
                         if (!v) return Error{name + ": " + v.error()};
@@ -57,7 +59,7 @@ void OptionRegistry::bind(const std::string& section, const std::string& key, do
 void OptionRegistry::bind(const std::string& section, const std::string& key, int* field, int min,
                           int max, const std::string& unit, const std::string& help) {
   const std::string name = section + "." + key;
-  entries_.push_back({section, key, unit, help, "integer", std::to_string(*field),
+  add({section, key, unit, help, "integer", std::to_string(*field),
                       [=](const std::string& text) -> Status {
                         auto v = parseDouble(text);
                         if (!v || *v != std::floor(*v)) return Error{name + ": '" + text + "' is not a whole number"};
@@ -71,7 +73,7 @@ void OptionRegistry::bind(const std::string& section, const std::string& key, in
 void OptionRegistry::bind(const std::string& section, const std::string& key, bool* field,
                           const std::string& help) {
   const std::string name = section + "." + key;
-  entries_.push_back({section, key, "", help, "boolean", *field ? "true" : "false",
+  add({section, key, "", help, "boolean", *field ? "true" : "false",
                       [=](const std::string& text) -> Status {
                         if (text == "true" || text == "1") *field = true;
                         else if (text == "false" || text == "0") *field = false;
@@ -86,7 +88,7 @@ void OptionRegistry::bind(const std::string& section, const std::string& key, st
   const std::string name = section + "." + key;
   std::string listed;
   for (const auto& c : choices) listed += (listed.empty() ? "" : "|") + c;
-  entries_.push_back({section, key, listed, help, "choice", *field,
+  add({section, key, listed, help, "choice", *field,
                       [=](const std::string& text) -> Status {
                         for (const auto& c : choices) {
                           if (c == text) {
@@ -97,6 +99,51 @@ void OptionRegistry::bind(const std::string& section, const std::string& key, st
                         return Error{name + ": '" + text + "' is not one of " + listed};
                       },
                       [=] { return *field; }});
+}
+
+void OptionRegistry::bindChoice(const std::string& section, const std::string& key,
+                                const std::vector<std::string>& names, int current,
+                                std::function<void(int)> set_index,
+                                std::function<std::string()> show, const std::string& help) {
+  assert(current >= 0);  // the field's default is one of the choices
+  const std::string name = section + "." + key;
+  std::string listed;
+  for (const auto& n : names) listed += (listed.empty() ? "" : "|") + n;
+  add({section, key, listed, help, "choice", names[static_cast<size_t>(current)],
+       [=](const std::string& text) -> Status {
+         for (size_t i = 0; i < names.size(); ++i) {
+           if (names[i] == text) {
+             set_index(static_cast<int>(i));
+             return {};
+           }
+         }
+         return Error{name + ": '" + text + "' is not one of " + listed};
+       },
+       show});
+}
+
+void OptionRegistry::add(Entry entry) {
+  Entry* existing = find(entry.section, entry.key);
+  if (!existing) {
+    entries_.push_back(std::move(entry));
+    return;
+  }
+  // A second component's copy of the same option: one value for both.
+  assert(existing->kind == entry.kind && existing->default_text == entry.default_text);
+  existing->parse = [first = existing->parse, second = entry.parse](const std::string& text) -> Status {
+    if (Status s = first(text); !s) return s;
+    return second(text);
+  };
+}
+
+std::vector<std::string> OptionRegistry::sectionsInOrder() const {
+  std::vector<std::string> sections;
+  for (const auto& e : entries_) {
+    if (std::find(sections.begin(), sections.end(), e.section) == sections.end()) {
+      sections.push_back(e.section);
+    }
+  }
+  return sections;
 }
 
 OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const std::string& key) {
@@ -143,10 +190,13 @@ Status OptionRegistry::set(const std::string& assignment) {
 
 std::string OptionRegistry::describe() const {
   std::ostringstream out;
-  for (const auto& e : entries_) {
-    out << "  " << e.section << "." << e.key << " = " << e.show();
-    if (!e.unit.empty()) out << " [" << e.unit << "]";
-    out << "\n";
+  for (const std::string& section : sectionsInOrder()) {
+    for (const auto& e : entries_) {
+      if (e.section != section) continue;
+      out << "  " << e.section << "." << e.key << " = " << e.show();
+      if (!e.unit.empty()) out << " [" << e.unit << "]";
+      out << "\n";
+    }
   }
   return out.str();
 }
@@ -154,8 +204,12 @@ std::string OptionRegistry::describe() const {
 std::string OptionRegistry::markdownTable() const {
   std::ostringstream out;
   out << "| option | unit | default | meaning |\n|---|---|---|---|\n";
-  for (const auto& e : entries_) {
-    out << "| `" << e.section << "." << e.key << "` | " << e.unit << " | " << e.default_text << " | " << e.help << " |\n";
+  for (const std::string& section : sectionsInOrder()) {
+    for (const auto& e : entries_) {
+      if (e.section != section) continue;
+      out << "| `" << e.section << "." << e.key << "` | " << e.unit << " | " << e.default_text
+          << " | " << e.help << " |\n";
+    }
   }
   return out.str();
 }
@@ -163,15 +217,14 @@ std::string OptionRegistry::markdownTable() const {
 std::string OptionRegistry::yamlText() const {
   std::ostringstream out;
   out << "%YAML:1.0\n";
-  std::string section;
-  for (const auto& e : entries_) {
-    if (e.section != section) {
-      section = e.section;
-      out << "\n" << section << ":\n";
+  for (const std::string& section : sectionsInOrder()) {
+    out << "\n" << section << ":\n";
+    for (const auto& e : entries_) {
+      if (e.section != section) continue;
+      const std::string value = e.kind == "choice" ? "\"" + e.show() + "\"" : e.show();
+      out << "  # " << e.help << (e.unit.empty() ? "" : " [" + e.unit + "]") << "\n";
+      out << "  " << e.key << ": " << value << "\n";
     }
-    const std::string value = e.kind == "choice" ? "\"" + e.show() + "\"" : e.show();
-    out << "  # " << e.help << (e.unit.empty() ? "" : " [" + e.unit + "]") << "\n";
-    out << "  " << e.key << ": " << value << "\n";
   }
   return out.str();
 }

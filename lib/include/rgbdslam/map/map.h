@@ -3,6 +3,8 @@
 // blurry image, the measurements made in them) and map points (world position and the
 // patch that describes them: source keyframe, level and pixel).
 //
+// Invariant: a keyframe measures a point exactly when the keyframe is among the point's
+// observers; measurements change only through Map (Keyframe::measurements() is read-only).
 // Ownership: the mapper owns the authoritative map; the tracker keeps a replica that it
 // extends with provisional keyframes and points and updates from MapUpdate messages. Both
 // are instances of this class; it has no locks (one thread owns each instance).
@@ -18,26 +20,35 @@
 #include "rgbdslam/image/pyramid.h"
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/map/map_types.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
+
+class Map;
+struct KeyframeBuildOptions;
 
 struct Keyframe {
   KeyframeId id = -1;
   int64_t utime = 0;        // acquisition time [us]
   SE3 T_w_c;
-  cv::Mat raw_depth;        // CV_16UC1 raw units as received (0 = none), or empty
-  double depth_scale = 5000.0;  // raw units per metre
   cv::Mat depth;            // CV_32FC1 [m], NaN where there is no reading, or empty
   ImagePyramid pyramid;     // grey, kMaxLevels levels
   std::vector<LevelCorners> corners;  // FAST corners per level
   SmallBlurryImage sbi;     // for relocalisation
-  std::unordered_map<PointId, Measurement> measurements;  // points seen in this keyframe
   double median_depth = 2.0;  // median depth of the points it measures [m]
 
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }
   // Depth [m] at a level-0 pixel (nearest pixel); nullopt when there is no valid reading.
   std::optional<double> depthAt(const Eigen::Vector2d& uv) const;
+  // The points seen in this keyframe. Changed only through the Map that holds the
+  // keyframe, which keeps its index of observers in step.
+  const std::unordered_map<PointId, Measurement>& measurements() const { return measurements_; }
+
+ private:
+  friend class Map;
+  friend std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData&, const KeyframeBuildOptions&);
+  std::unordered_map<PointId, Measurement> measurements_;
 };
 
 struct MapPoint {
@@ -49,6 +60,11 @@ struct MapPoint {
   int times_projected = 0;  // tracker: frames in which it was predicted visible and searched
   int times_found = 0;      // tracker: frames in which it was found
 
+  MapPoint() = default;
+  // A point as the messages describe it (tracker statistics zero).
+  explicit MapPoint(const MapPointData& d)
+      : id(d.id), p_w(d.p_w), source_keyframe(d.source_keyframe), source_level(d.level),
+        source_uv(d.uv) {}
   MapPointData data() const { return {id, p_w, source_keyframe, source_uv, source_level}; }
 };
 
@@ -57,9 +73,12 @@ struct KeyframeBuildOptions {
   CornerOptions corners;
   double min_depth_m = 0.3;  // readings nearer than this are treated as invalid [m]
   double max_depth_m = 8.0;  // readings farther than this are treated as invalid [m]
+
+  void bind(OptionRegistry* registry, const std::string& section);  // the depth range
 };
 
-// Builds pyramid, corners, SBI and metric depth from a keyframe message's content.
+// Builds pyramid, corners, SBI and metric depth from a keyframe message's content, with its
+// measurements (the Map indexes them when the keyframe is added).
 std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeBuildOptions& options);
 // Converts raw depth to metres with NaN for invalid readings (0, out of range).
 cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m);
@@ -82,9 +101,13 @@ class Map {
   const std::unordered_map<PointId, MapPoint>& points() const { return points_; }
   size_t numPoints() const { return points_.size(); }
 
-  // Adds a measurement of an existing point to an existing keyframe.
+  // Adds (or replaces) a measurement of an existing point in an existing keyframe.
   void addMeasurement(KeyframeId keyframe_id, const Measurement& measurement);
-  // Keyframes that measure the point.
+  // Removes one measurement; the point stays, with its other measurements.
+  void removeMeasurement(KeyframeId keyframe_id, PointId point_id);
+  // Sets the depth reading of an existing measurement (0: none, e.g. a depth outlier).
+  void setMeasurementDepth(KeyframeId keyframe_id, PointId point_id, double depth);
+  // Keyframes that measure the point, in the order their measurements were added.
   std::vector<KeyframeId> observers(PointId id) const;
 
   // The n keyframes nearest to a pose: by camera-centre distance plus a penalty for viewing

@@ -1,19 +1,15 @@
 #pragma once
 // Plain data exchanged between tracker and mapper (and carried by keyframe_t / map_t).
-// Ids: keyframes count from 0; provisional points created by the tracker at keyframe k get
-// ids k * kPointsPerKeyframe + i, so tracker and mapper name them alike without talking.
+// Ids: point_ids.h.
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <set>
 #include <vector>
 
 #include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/map/point_ids.h"
 
 namespace rgbdslam {
-
-using KeyframeId = int64_t;
-using PointId = int64_t;
-constexpr int64_t kPointsPerKeyframe = int64_t{1} << 20;
 
 struct Measurement {
   PointId point_id = -1;

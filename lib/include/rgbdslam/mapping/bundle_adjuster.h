@@ -2,8 +2,8 @@
 // Bundle adjustment with 2-D and depth residuals (paper sec. IV; ARCHITECTURE.md "Bundle
 // adjustment with depth"). Minimises over the free keyframe poses and point positions
 //   sum_ij rho(|e2_ij| / sigma2_ij) + sum_ij rho(|ed_ij| / sigmad_ij)
-// with the residuals of ba_residuals.h, sigma2 = k 2^level [px], sigmad = a d^2 [m] (the
-// measured d) and rho Tukey's biweight (ceres::TukeyLoss, a = tukey_c * sigma_T, on each
+// with the residuals of model/residuals.h, sigma2 = k 2^level [px], sigmad = a d^2 [m] (the
+// measured d; model/noise_model.h) and rho Tukey's biweight (ceres::TukeyLoss, a = tukey_c * sigma_T, on each
 // residual block on its own), solved by Levenberg-Marquardt with Schur elimination of the
 // points.
 //
@@ -32,11 +32,13 @@
 
 #include <atomic>
 #include <cstdint>
-#include <iosfwd>
+#include <string>
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/model/noise_model.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -49,10 +51,10 @@ struct BaOptions {
     kIterativeSchur,  // conjugate gradients on the reduced camera system (Schur-Jacobi)
   };
 
-  double sigma_2d_k = 0.987;           // 2-D noise scale k [px]: sigma = k * 2^level (eq. 16)
-  double depth_sigma_a = 3.331e-3;     // depth noise a [1/m]: sigma = a * d^2 [m] (eq. 17)
+  NoiseModel noise;                    // sigma2 and sigmad (bound as section "noise")
   bool use_depth = true;               // add the 1-D depth residuals (mode depth-ba); false: 2-D
-                                       // only (modes mono and depth-init)
+                                       // only (modes mono and depth-init; the mapper turns it
+                                       // off there)
   double tukey_c = 4.6851;             // Tukey biweight cut-off in units of sigma_T (95 %
                                        // efficiency under Gaussian noise); > 0
   double min_sigma_t = 0.5;            // floor of the robust scale sigma_T [units of sigma], so
@@ -86,7 +88,8 @@ struct BaOptions {
   LinearSolver linear_solver = LinearSolver::kAuto;
   int dense_schur_max_poses = 40;  // kAuto: dense Schur up to this many free poses [-]
 
-  void print(std::ostream& out) const;  // one "key: value" line per field
+  // Every field, as section.<field name> (noise as section "noise").
+  void bind(OptionRegistry* registry, const std::string& section = "bundle_adjustment");
 };
 
 struct BaKeyframe {
@@ -165,7 +168,7 @@ class BundleAdjuster {
 //
 // Pose parameter block: 7 doubles of T_c_w, the quaternion (x, y, z, w; Eigen's coeffs()
 // order) then the translation [m]. Its tangent is the 6-D xi of the left perturbation
-// T_c_w <- exp(xi) * T_c_w, the same as in ba_residuals.h.
+// T_c_w <- exp(xi) * T_c_w, the same as in model/residuals.h.
 //
 // Jacobian trick: a cost function must give Ceres the Jacobian with respect to the 7 ambient
 // coordinates, and Ceres multiplies it by the manifold's PlusJacobian (7x6) to get the

@@ -9,23 +9,35 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/patch.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
-struct RefindOptions {
-  int search_radius_px = 5;   // around the predicted position [px of the search level]
-  int max_zmssd = 400 * 64;   // accepted patch difference [grey^2 over 64 px]
+// Patch acceptance of the mapper's searches (epipolar search and re-finding).
+struct PatchMatchOptions {
+  int max_zmssd_per_pixel = 400;      // accepted patch difference [grey^2 per patch pixel]
   // ...and below this times the template's zero-mean energy, which a textureless patch
   // exceeds (as the tracker's PointSearchOptions::max_zmssd_flat_ratio; 0: off) [-]
-  double max_zmssd_flat_ratio = 0.0;
+  double max_zmssd_flat_ratio = 0.7;
+
+  // The ZMSSD a match of 'patch' must stay below (flatCappedAcceptance).
+  int acceptance(const Patch& patch) const;
+  void bind(OptionRegistry* registry, const std::string& section);
+};
+
+struct RefindOptions {
+  int search_radius_px = 5;   // around the predicted position [px of the search level]
   double border_px = 8.0;     // predictions closer to the image edge are not searched [px]
+
+  void bind(OptionRegistry* registry, const std::string& section);  // the radius
 };
 
 // The measurement of 'point' (whose patch lives in 'source') in 'target' (depth 0), or
 // nullopt when it projects outside, behind, at a degenerate warp, or is not found.
 std::optional<Measurement> findPointInKeyframe(const MapPoint& point, const Keyframe& source,
                                                const Keyframe& target, const PinholeCamera& camera,
-                                               const RefindOptions& options);
+                                               const RefindOptions& options,
+                                               const PatchMatchOptions& matching);
 
 // The ZMSSD acceptance for 'patch': min(max_zmssd, flat_ratio * its zero-mean energy), or
 // max_zmssd when flat_ratio <= 0. A weak template is not accepted on a textureless patch.

@@ -14,6 +14,8 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/mapping/data_association.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -26,17 +28,20 @@ struct EpipolarOptions {
   // corridor walls, where the strong corners are far away and too close to the epipole to
   // triangulate in forward motion) also tries weaker corners, down to weak_min_shi_tomasi,
   // after the strong ones and with a budget of max_points of their own, until it measures
-  // weak_until_points (0: never).
+  // weak_until_points (0: never). The mapper uses it only where every point must come from
+  // epipolar search (mono): in the depth modes the points from depth took those corners.
   double weak_min_shi_tomasi = 10.0;  // [(grey/px)^2]
-  int weak_until_points = 0;          // [points]
+  int weak_until_points = 100;        // [points]
   double min_separation_px = 8.0;     // from measured points and each other, level 0 [px]
   double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
   double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]
-  int max_zmssd = 400 * 64;           // accepted patch difference [grey^2 over 64 px]
-  double max_zmssd_flat_ratio = 0.0;  // ...and below this times the template's energy (0: off)
   double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
   double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
-  bool skip_corners_with_depth = true;  // only corners without a depth reading (depth modes)
+  // Only corners without a depth reading (the depth modes); set by the mapper per keyframe
+  // from the mode, not configured.
+  bool skip_corners_with_depth = true;
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as epipolar_*
 };
 
 struct EpipolarPoint {
@@ -50,10 +55,12 @@ struct EpipolarStats {
       bad_triangulation = 0, created = 0;
 };
 
-// Points ids are first_id + i. 'stats' (optional) receives the counts per outcome.
+// Points ids are first_id + i; 'matching' accepts the best match. 'stats' (optional)
+// receives the counts per outcome.
 std::vector<EpipolarPoint> epipolarSearch(const Keyframe& keyframe, const Keyframe& other,
                                           const PinholeCamera& camera, const EpipolarOptions& options,
-                                          PointId first_id, EpipolarStats* stats = nullptr);
+                                          const PatchMatchOptions& matching, PointId first_id,
+                                          EpipolarStats* stats = nullptr);
 
 // Midpoint of the shortest segment between two rays (origins o_a, o_b and unit directions
 // d_a, d_b in the world). nullopt when the rays are (nearly) parallel or the point lies

@@ -8,12 +8,17 @@
 #include <vector>
 
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
 struct CullOptions {
   int min_good_measurements = 2;      // fewer: the point goes (unless source-only and recent)
   double max_outlier_fraction = 0.5;  // more of a point's measurements flagged: the point goes
+  int keep_source_only_keyframes = 3;  // points seen only in their source keyframe survive
+                                       // while it is among this many newest keyframes
+
+  void bind(OptionRegistry* registry, const std::string& section);
 };
 
 struct CullResult {
@@ -21,13 +26,9 @@ struct CullResult {
   int removed_measurements = 0;         // single measurements removed (points kept)
 };
 
-// 'pending_2d_outliers' (point id, keyframe id) is consumed. recent_keyframes: the newest
-// keyframes whose source-only points are kept.
+// 'pending_2d_outliers' (point id, keyframe id) is consumed.
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
-                   const std::set<KeyframeId>& recent_keyframes, const CullOptions& options);
-
-// Removes one measurement (the point stays, with its other measurements).
-void removeMeasurement(Map* map, KeyframeId keyframe_id, PointId point_id);
+                   const CullOptions& options);
 
 // Point ids of the map in increasing order.
 std::vector<PointId> sortedPointIds(const Map& map);

@@ -5,8 +5,8 @@
 //   measurements of existing points and its provisional points from depth (measurements of
 //   unknown points are dropped and counted); for corners without depth (every corner in mono
 //   mode) add points by epipolar search against a partner keyframe (the nearest, or a
-//   farther one for parallax: epipolar_partner_distance_ratio; in mono then also the nearest
-//   others, epipolar_partners_mono) (epipolar_search.h); run local bundle adjustment (the new
+//   farther one for parallax: EpipolarPartnerOptions; in mono then also the nearest others,
+//   partners_mono) (epipolar_search.h); run local bundle adjustment (the new
 //   keyframe and its nearest neighbours free, the other keyframes that see their points
 //   fixed, keyframe 0 always fixed).
 //   refine(interrupt): the background work, one PTAM loop pass per call: re-find the newest
@@ -25,9 +25,7 @@
 // not see the scale, so keyframe 0's points (the map initialisation from measured depth)
 // are held fixed and keep it (fixing a second, tracked keyframe instead would pin its
 // tracking error into the whole map).
-// Point ids: provisional points from the tracker use keyframe_id * kPointsPerKeyframe + i
-// (i < kPointsPerKeyframe / 2); points the mapper creates for keyframe k use the upper half
-// of k's block, so both sides name points alike without talking.
+// Point ids: the tracker's provisional points and the mapper's own, by point_ids.h.
 // Determinism: no randomness; everything iterates in id order, so equal inputs give equal
 // maps.
 // Threads: not thread-safe; one thread calls everything (interrupt may be set by another).
@@ -39,60 +37,57 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/mapping/bundle_adjuster.h"
-#include "rgbdslam/mapping/slam_mode.h"
+#include "rgbdslam/mapping/data_association.h"
+#include "rgbdslam/mapping/epipolar_search.h"
+#include "rgbdslam/mapping/map_maintenance.h"
+#include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
-struct MapperOptions {
-  // Bundle adjustment windows
+// When bundle adjustment runs and over which keyframes.
+struct BaWindowOptions {
   int local_ba_neighbours = 4;          // nearest keyframes optimised with the new one
   int global_ba_every = 1;              // run global BA after this many new keyframes
   int max_global_ba_keyframes = 40;     // above this, global BA optimises only the newest ones
                                         // (bounds its cost on long runs: the corridor makes a
                                         // keyframe every ~0.15 m)
-  // Epipolar search (points where there is no depth)
-  double epipolar_min_depth_m = 0.3;    // search range along the epipolar line [m]
-  double epipolar_max_depth_m = 8.0;    // [m]
-  // The partner keyframe: the farthest within this times the new keyframe's median depth
+
+  void bind(OptionRegistry* registry, const std::string& section);
+};
+
+// Which keyframes a new keyframe's epipolar search pairs it with.
+struct EpipolarPartnerOptions {
+  // The partner: the farthest keyframe within this times the new keyframe's median depth
   // whose optical axis is within the angle (nearest if none is farther): with a keyframe
   // every few frames (forward motion, few points) the nearest gives no parallax [-, deg].
-  double epipolar_partner_distance_ratio = 0.25;
-  double epipolar_partner_max_angle_deg = 20.0;
-  int epipolar_max_points = 300;        // corners without depth tried per new keyframe
+  double distance_ratio = 0.25;
+  double max_angle_deg = 20.0;
   // Mono keyframes (no points from depth) search against this many partners: the one
   // above, then the other keyframes within the angle, nearest first; corners taken by an
   // earlier partner are not tried again [keyframes]. Measured on the corridor (900 frames):
   // 1 partner 899/900 posed, 0.054 % final; 2: 900/900, 0.072 %, and keyframe settings
-  // that collapsed the scale with 1 partner (tracker.h) got through (0.09-0.18 %); 3: 0.22 %.
-  int epipolar_partners_mono = 2;
-  double epipolar_min_shi_tomasi = 30.0;  // weaker corners are not tried [(grey/px)^2]
-  // ...except in a mono keyframe (no points from depth) measuring fewer than
-  // epipolar_weak_until_points points: then also corners down to epipolar_weak_min_shi_tomasi
-  // (EpipolarOptions; 0: never)
-  double epipolar_weak_min_shi_tomasi = 10.0;  // [(grey/px)^2]
-  int epipolar_weak_until_points = 100;        // [points]
-  double epipolar_min_separation_px = 8.0;  // from points the keyframe measures, level 0 [px]
-  double epipolar_line_tolerance_px = 1.5;  // corner distance from the epipolar segment [level px]
-  double epipolar_distinctiveness = 0.8;    // best ZMSSD must be below this times the
-                                            // second best (a corner > 2 px away) [-]
-  double epipolar_min_parallax_deg = 1.0;   // smaller ray angles do not triangulate [deg]
-  double epipolar_max_reprojection_px = 2.0;  // triangulated point's error in either view [level px]
-  // Patch matching (epipolar search and re-finding)
-  int max_zmssd_per_pixel = 400;        // patch acceptance: ZMSSD / 64 below this [grey^2]
-  // ...and below this times the template's zero-mean energy: a weak template is not
-  // accepted on a textureless patch (tracker.max_zmssd_flat_ratio; 0: off) [-]
-  double max_zmssd_flat_ratio = 0.7;
-  int refind_search_radius_px = 5;      // re-finding: search radius around the prediction [level px]
-  // Culling
-  int min_good_measurements = 2;        // points with fewer good measurements are culled (not source-only)
-  int keep_source_only_keyframes = 3;   // points seen only in their source keyframe survive
-                                        // while it is among this many newest keyframes
-  double max_outlier_fraction = 0.5;    // points whose measurements are mostly outliers are culled
-  BaOptions ba;
+  // that collapsed the scale with 1 partner (keyframe_policy.h) got through (0.09-0.18 %);
+  // 3: 0.22 %.
+  int partners_mono = 2;
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as epipolar_partner*
+};
+
+// Options of the mapper, bound in section "mapper" (bundle adjustment in
+// "bundle_adjustment", its noise model in "noise"). Each part binds its own keys; the
+// defaults are the parts' in-class ones.
+struct MapperOptions {
+  BaWindowOptions ba_windows;
+  EpipolarPartnerOptions epipolar_partners;
+  EpipolarOptions epipolar;     // points where there is no depth (epipolar_search.h)
+  PatchMatchOptions matching;   // patch acceptance of epipolar search and re-finding
+  RefindOptions refind;         // re-finding new points in the other keyframes
+  CullOptions cull;             // map clean-up (map_maintenance.h)
+  BaOptions ba;                 // use_depth only in mode depth-ba
   KeyframeBuildOptions keyframe_build;
 
-  void bind(OptionRegistry* registry);  // section "mapper" (and "bundle_adjustment")
+  void bind(OptionRegistry* registry, const std::string& section = "mapper");
 };
 
 struct MapperResult {

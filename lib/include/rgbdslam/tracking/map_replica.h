@@ -18,7 +18,7 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
-#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/model/point_creation.h"
 #include "rgbdslam/tracking/point_projection.h"
 
 namespace rgbdslam {

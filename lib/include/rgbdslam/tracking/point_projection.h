@@ -18,6 +18,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/patch.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -62,6 +63,8 @@ bool initSlot(const Map& map, const PinholeCamera& camera, MapPoint* point, Poin
 struct ProjectionOptions {
   int margin_px = 8;              // inside the image by this much [px]
   double min_depth_m = 0.05;      // in front of the camera by this much [m]
+
+  void bind(OptionRegistry* registry, const std::string& section);  // margin_px only
 };
 
 // p_c, uv, A_cur_src and search_level of the slot at pose T_c_w. False when the point is
@@ -80,37 +83,41 @@ bool ensurePatch(PointSlot* slot, double tolerance);
 
 namespace rgbdslam {
 
+// Patch acceptance and search of the tracker's stages (the radius is the stage's).
 struct PointSearchOptions {
-  int radius_px = 4;                    // search radius at the search level [px]
-  int max_zmssd = 400 * kPatchArea;     // ZMSSD acceptance floor [grey^2 over the patch]
+  int max_zmssd_per_pixel = 400;        // ZMSSD acceptance floor [grey^2 per patch pixel]
   // Acceptance relative to the template's own zero-mean energy E = sum (T - mean T)^2: a
-  // match is accepted when ZMSSD < max(max_zmssd, ratio * E). Why: the ZMSSD of a correct
-  // match grows with the template's contrast (blur, resampling and small appearance changes
-  // scale with the gradients), so an absolute threshold rejects exactly the high-contrast
-  // patches that localise best. A flat image patch scores ZMSSD = E, so ratio < 1 still
-  // rejects "no texture here". 0 disables (absolute threshold only).
-  double max_zmssd_energy_ratio = 0.0;
+  // match is accepted when ZMSSD < max(max_zmssd_per_pixel * kPatchArea, ratio * E). Why:
+  // the ZMSSD of a correct match grows with the template's contrast (blur, resampling and
+  // small appearance changes scale with the gradients), so an absolute threshold rejects
+  // exactly the high-contrast patches that localise best. A flat image patch scores
+  // ZMSSD = E, so ratio < 1 still rejects "no texture here". 0 disables (absolute only).
+  double max_zmssd_energy_ratio = 0.5;
   // ...and in any case ZMSSD < max_zmssd_flat_ratio * E. Why: with template contrast s and
   // image noise sigma (per pixel), E = n (s^2 + sigma^2), a correct match scores about
   // 2 n sigma^2 and a textureless image patch n (s^2 + 2 sigma^2) >= E, whatever sigma is.
-  // Without this cap the absolute floor max_zmssd accepts a weak template (E below the
-  // floor) anywhere, e.g. on a plain corridor wall, and the pose stays at its prediction.
+  // Without this cap the absolute floor accepts a weak template (E below the floor)
+  // anywhere, e.g. on a plain corridor wall, and the pose stays at its prediction.
   // A ratio of 0.7 keeps templates whose contrast is at least ~1.5 times the noise
   // (2 sigma^2 / (s^2 + sigma^2) < 0.7). 0 disables (no cap).
-  double max_zmssd_flat_ratio = 0.0;
+  double max_zmssd_flat_ratio = 0.7;
   // When no FAST corner within the radius is accepted, also test every pixel within the
   // radius (PTAM searches corners only; under motion blur and on fine texture the true
   // position often is no FAST corner at this frame's threshold).
-  bool dense_fallback = false;
+  bool dense_fallback = true;
   double patch_cache_tolerance = 0.05;  // see ensurePatch()
   SubpixelOptions subpixel;
+
+  void bind(OptionRegistry* registry, const std::string& section);  // all but subpixel
 };
 
-// Searches each slot's (warped) patch among the FAST corners of its search level around its
-// predicted pixel (and, with dense_fallback, at every pixel in the radius when no corner is
-// accepted) and refines the best match to sub-pixel. Sets searched (the patch could be
-// made), found, found_uv (level 0) and found_level. Returns the number found.
+// Searches each slot's (warped) patch among the FAST corners of its search level within
+// radius_px [px at the search level] of its predicted pixel (and, with dense_fallback, at
+// every pixel in the radius when no corner is accepted) and refines the best match to
+// sub-pixel. Sets searched (the patch could be made), found, found_uv (level 0) and
+// found_level. Returns the number found.
 int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyramid,
-                 const std::vector<LevelCorners>& corners, const PointSearchOptions& options);
+                 const std::vector<LevelCorners>& corners, int radius_px,
+                 const PointSearchOptions& options);
 
 }  // namespace rgbdslam

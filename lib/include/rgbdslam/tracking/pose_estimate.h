@@ -33,7 +33,10 @@ struct PoseEstimate {
   TrackingState state = TrackingState::kInitialising;
   int points_tracked = 0;
   double quality = 0.0;     // fraction of searched points found [0, 1]
-  double latency_ms = 0.0;  // frame utime to publication [ms]
+  // From the frame's utime to the publication of this pose [ms]: only the process that
+  // publishes knows it and sets it (rgbd-tracker); the tracker leaves 0. The tracker's own
+  // time for the frame is TrackResult::track_ms.
+  double latency_ms = 0.0;
 };
 
 }  // namespace rgbdslam

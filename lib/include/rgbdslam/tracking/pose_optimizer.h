@@ -18,32 +18,38 @@
 // on a small step before the cap has been applied.
 //
 // Call order: fill PoseObservations, optimisePose(camera, T_c_w_start, observations, options).
-// Frames and units: T_c_w maps world to camera (the residuals' convention, ba_residuals.h),
+// Frames and units: T_c_w maps world to camera (the residuals' convention, model/residuals.h),
 // updated by the left perturbation T_c_w <- exp(xi) T_c_w. Pixels at level 0, depth in m.
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/model/noise_model.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
 struct PoseObservation {
   Vec3 p_w = Vec3::Zero();                       // map point [m]
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // measured pixel, level 0 [px]
-  int level = 0;                                 // pyramid level found at (sigma2d(level))
+  int level = 0;                                 // pyramid level found at (its sigma)
   double depth = 0.0;                            // measured depth [m]; 0 = none
 };
 
 struct PoseOptimizerOptions {
-  int iterations = 10;                        // Gauss-Newton iterations at most
-  double tukey_c = 4.6851;                    // cut-off in robust sigmas
-  double min_robust_sigma = 0.4;              // floor of the robust scale [measurement sigmas]
-  double max_robust_sigma = 1.0;              // cap of the robust scale after the free
-                                              // iterations [measurement sigmas]; 0: no cap
-  int free_scale_iterations = 5;              // iterations with the uncapped median scale
-  bool use_depth = true;                      // add the depth residuals
-  double depth_sigma_coefficient = 3.331e-3;  // a in sigma_d = a d^2 [1/m]
-  double converged_step = 1e-7;               // stop when |xi| is below this
+  int iterations = 10;                // Gauss-Newton iterations per stage at most
+  double tukey_c = 4.6851;            // cut-off in robust sigmas
+  double min_robust_sigma = 0.4;      // floor of the robust scale [measurement sigmas]
+  double max_robust_sigma = 1.0;      // cap of the robust scale after the free
+                                      // iterations [measurement sigmas]; 0: no cap
+  int free_scale_iterations = 5;      // iterations with the uncapped median scale
+  // Add the depth residuals of observations with a reading. The tracker turns this off in
+  // mono, where depth serves only the first frame (slam_mode.h).
+  bool use_depth = true;
+  NoiseModel noise;                   // measurement sigmas (bound as section "noise")
+  double converged_step = 1e-7;       // stop when |xi| is below this [-]
+
+  void bind(OptionRegistry* registry, const std::string& section);  // keys of the tracker's
 };
 
 struct PoseOptimizerResult {
@@ -66,7 +72,7 @@ struct PoseUncertainty {
 };
 PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information);
 
-// Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / (a d^2)) over T_c_w.
+// Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / sigmaDepth(d)) over T_c_w.
 // inlier (optional) receives one flag per observation: its 2-D residual kept a weight.
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,

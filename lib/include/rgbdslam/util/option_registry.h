@@ -4,8 +4,13 @@
 // with one mapping per section and rejects unknown sections, unknown keys and ill-typed or
 // out-of-range values, naming the key and the file; describe() prints the effective
 // configuration. Call order: bind all fields, load() (optional), describe().
+// One option may feed several components: binding a section.key that is already bound (same
+// kind, same default) adds the field as another target, so that e.g. noise.sigma_2d_k sets
+// the tracker's and the bundle adjuster's copy of the noise model alike. Output lists each
+// option once, sections in the order they were first bound.
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rgbdslam/util/expected.h"
@@ -23,6 +28,26 @@ class OptionRegistry {
   // A string restricted to 'choices'.
   void bind(const std::string& section, const std::string& key, std::string* field,
             const std::vector<std::string>& choices, const std::string& help);
+  // An enumeration written as one of the names in 'choices'.
+  template <typename Enum>
+  void bind(const std::string& section, const std::string& key, Enum* field,
+            const std::vector<std::pair<std::string, Enum>>& choices, const std::string& help) {
+    std::vector<std::string> names;
+    int current = -1;
+    for (size_t i = 0; i < choices.size(); ++i) {
+      names.push_back(choices[i].first);
+      if (choices[i].second == *field) current = static_cast<int>(i);
+    }
+    bindChoice(section, key, names, current,
+               [field, choices](int i) { *field = choices[static_cast<size_t>(i)].second; },
+               [field, choices] {
+                 for (const auto& [name, value] : choices) {
+                   if (value == *field) return name;
+                 }
+                 return std::string("?");
+               },
+               help);
+  }
 
   Status load(const std::string& path);
   // Sets one option from "section.key=value" (command-line overrides).
@@ -41,6 +66,13 @@ class OptionRegistry {
     std::function<std::string()> show;
   };
   Entry* find(const std::string& section, const std::string& key);
+  // Adds the entry, or chains its parse onto an existing one of the same name (see above).
+  void add(Entry entry);
+  void bindChoice(const std::string& section, const std::string& key,
+                  const std::vector<std::string>& names, int current,
+                  std::function<void(int)> set_index, std::function<std::string()> show,
+                  const std::string& help);
+  std::vector<std::string> sectionsInOrder() const;
   std::vector<Entry> entries_;
 };
 

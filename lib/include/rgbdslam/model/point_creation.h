@@ -4,11 +4,12 @@
 // point p_w = T_w_c * unproject(uv, d). Used for the initial map (keyframe 0) and, by the
 // tracker, for the provisional points of each new keyframe. Corners close to a point the
 // keyframe already measures are skipped, so a keyframe does not duplicate what it tracks.
-// Ids: first_id + i, where the caller passes keyframe_id * kPointsPerKeyframe.
+// Ids: first_id + i, where the tracker passes provisionalPointId(keyframe_id, 0) (point_ids.h).
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
 
@@ -24,6 +25,8 @@ struct DepthPointOptions {
   int patch_border_px = 6;            // corners this close to the level's border are skipped [px]
   double dense_depth_fraction = 0.5;  // at least this fraction of pixels with depth: a missing 3x3 neighbour rejects a corner
   double depth_discontinuity = 0.05;  // max spread of the 3x3 window's depths relative to the centre's (edges are skipped)
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as depth_points_*
 };
 
 struct NewPoint {

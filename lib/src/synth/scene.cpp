@@ -1,6 +1,6 @@
 // The public face of the synthetic renderer: options and their spec string, the scene
 // (trajectory, timestamps, rendering), TUM export and the FrameSource.
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 #include <cassert>
 #include <charconv>
@@ -13,7 +13,7 @@
 #include <tuple>
 #include <opencv2/imgcodecs.hpp>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam {
 namespace {

@@ -1,4 +1,4 @@
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 #include <cmath>
 
@@ -37,9 +37,5 @@ bool depthResidual(const SE3& T_c_w, const Vec3& p_w, double depth_measured, dou
   if (d_res_d_pw) *d_res_d_pw = -T_c_w.rotationMatrix().row(2);
   return true;
 }
-
-double sigma2d(int level, double k) { return std::ldexp(k, level); }
-
-double sigmaDepth(double d, double a) { return a * d * d; }
 
 }  // namespace rgbdslam

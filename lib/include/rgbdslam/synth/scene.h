@@ -131,8 +131,8 @@ std::string formatSyntheticSpec(const SyntheticOptions& options);
 Status validateSyntheticOptions(const SyntheticOptions& options);
 
 namespace synthetic {
-struct World;  // boxes, baked textures and the trajectory (lib/src/io/synthetic_world.h)
-struct LensResampling;  // pinhole canvas -> distorted image (lib/src/io/synthetic_world.h)
+struct World;  // boxes, baked textures and the trajectory (lib/src/synth/world.h)
+struct LensResampling;  // pinhole canvas -> distorted image (lib/src/synth/world.h)
 }
 
 class SyntheticScene {

@@ -6,7 +6,7 @@
 //            posters and ceiling lamps; the camera flies forward at 1 m/s.
 #include <cmath>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam::synthetic {
 namespace {

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam::synthetic {
 namespace {

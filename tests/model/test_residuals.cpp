@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "rgbdslam/mapping/ba_residuals.h"
+#include "rgbdslam/model/residuals.h"
 
 namespace rgbdslam {
 namespace {
@@ -186,14 +186,6 @@ TEST(BaResiduals, PointsBehindTheCameraAreInvalid) {
   }
   EXPECT_TRUE(reprojectionResidual(freiburg1Camera(), T_c_w, Vec3(0, 0, 0.5), {320, 240}, &e));
   EXPECT_TRUE(depthResidual(T_c_w, Vec3(0, 0, 0.5), 1.0, &e_d));
-}
-
-TEST(BaResiduals, NoiseModels) {
-  EXPECT_DOUBLE_EQ(sigma2d(0), 0.987);
-  EXPECT_DOUBLE_EQ(sigma2d(2), 4 * 0.987);
-  EXPECT_DOUBLE_EQ(sigma2d(3, 1.5), 12.0);
-  EXPECT_DOUBLE_EQ(sigmaDepth(2.0), 4 * 3.331e-3);
-  EXPECT_DOUBLE_EQ(sigmaDepth(3.0, 0.01), 0.09);
 }
 
 }  // namespace

@@ -1,10 +1,10 @@
 #pragma once
-// Internals of the synthetic renderer (lib/io/synthetic_scene.h), shared by its .cpp files:
-//  - synthetic_textures.cpp: procedural multi-scale textures baked per box face, with mips;
-//  - synthetic_layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
-//  - synthetic_raycast.cpp:  exact ray casting of one pose into clean colour and depth;
-//  - synthetic_noise.cpp:    the Kinect error model and image noise on a clean frame;
-//  - synthetic_scene.cpp:    the public API, spec parsing, TUM export, the FrameSource.
+// Internals of the synthetic renderer (synth/scene.h), shared by its .cpp files:
+//  - textures.cpp: procedural multi-scale textures baked per box face, with mips;
+//  - layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
+//  - raycast.cpp:  exact ray casting of one pose into clean colour and depth;
+//  - noise.cpp:    the Kinect error model and image noise on a clean frame;
+//  - scene.cpp:    the public API, spec parsing, TUM export, the FrameSource.
 // World frame z-up, metres. Everything random takes an explicit engine seeded from the seed.
 #include <array>
 #include <cstdint>
@@ -14,7 +14,7 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 #include "rgbdslam/util/expected.h"
 
 namespace rgbdslam::synthetic {
@@ -124,7 +124,7 @@ struct CleanFrame {
 void castRays(const World& world, const PinholeCamera& camera, const SE3& T_w_c,
               CleanFrame* out);
 
-// ---- lens distortion (lib/src/io/synthetic_lens.cpp)
+// ---- lens distortion (lib/src/synth/lens.cpp)
 // A distorted camera is rendered by ray-casting an ideal pinhole 'canvas' camera (same focal
 // lengths, large enough to hold everything the lens sees) and resampling: each pixel of the
 // distorted image takes the canvas pixel its ray passes through.

@@ -4,7 +4,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam::synthetic {
 namespace {

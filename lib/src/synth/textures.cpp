@@ -5,7 +5,7 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam::synthetic {
 namespace {

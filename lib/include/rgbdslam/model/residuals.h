@@ -1,7 +1,7 @@
 #pragma once
-// Bundle-adjustment residuals (paper sec. IV): the 2-D reprojection error and the 1-D depth
+// The residuals of bundle adjustment and of the tracker's pose fit (paper sec. IV): the 2-D reprojection error and the 1-D depth
 // error of one measurement of map point p_w in one keyframe, with analytic Jacobians
-// (eq. 6-10, 13-15), plus the noise models of sec. V (eq. 16, 17).
+// (eq. 6-10, 13-15). Their noise (sec. V, eq. 16, 17) is noise_model.h.
 //
 // Shape (the same for both, as in basalt's ba_utils.h): return false when the residual is not
 // defined (point at or behind the camera); otherwise write the residual and, when the pointers
@@ -44,13 +44,5 @@ bool depthResidual(const SE3& T_c_w, const Vec3& p_w, double depth_measured, dou
 // Points closer to the camera than this [m] give no residual: the projection blows up and
 // no RGB-D sensor measures there.
 constexpr double kMinBaPointDepth = 1e-3;
-
-// Standard deviation of a 2-D measurement found at pyramid 'level' [px at level 0]:
-// sigma = k * 2^level (eq. 16; k = 0.987 estimated in the paper).
-double sigma2d(int level, double k = 0.987);
-
-// Standard deviation of a Kinect depth reading d [m]: sigma = a * d^2 [m] (eq. 17;
-// a = 3.331e-3 1/m from the paper's plane experiment).
-double sigmaDepth(double d, double a = 3.331e-3);
 
 }  // namespace rgbdslam

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <limits>
 
-#include "synthetic_world.h"
+#include "world.h"
 
 namespace rgbdslam::synthetic {
 namespace {

@@ -1,10 +1,27 @@
-#include "rgbdslam/mapping/point_creation.h"
+#include "rgbdslam/model/point_creation.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
 namespace rgbdslam {
+
+void DepthPointOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "depth_points_per_level", &max_points_per_level, 0, 100000, "points",
+          "new points from depth per keyframe and pyramid level at most");
+  r->bind(s, "depth_points_min_shi_tomasi", &min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
+          "weaker corners give no point");
+  r->bind(s, "depth_points_weak_min_shi_tomasi", &weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
+          "a keyframe with few points also takes corners down to this score...");
+  r->bind(s, "depth_points_weak_until_points", &weak_until_points, 0, 100000, "points",
+          "...until it measures this many points (0: never)");
+  r->bind(s, "depth_points_min_separation_px", &min_separation_px, 0.0, 100.0, "px",
+          "new points keep this distance from measured points and each other");
+  r->bind(s, "depth_points_discontinuity", &depth_discontinuity, 0.0, 1.0, "fraction",
+          "a spread of the 3x3 window's depths above this (relative to the corner's) rejects the corner");
+  r->bind(s, "depth_points_dense_fraction", &dense_depth_fraction, 0.0, 1.0, "fraction",
+          "with at least this fraction of pixels valid, a missing 3x3 neighbour rejects a corner");
+}
 namespace {
 
 // Occupancy grid over level-0 pixels with cells of min_separation: a corner is rejected
@@ -107,13 +124,11 @@ void addPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
       if (!grid->isFree(uv)) continue;
       const auto depth = stableDepth(keyframe.depth, uv, options.depth_discontinuity, dense);
       if (!depth) continue;
+      const PointId id = first_id + static_cast<PointId>(created->size());
       NewPoint np;
-      np.point.id = first_id + static_cast<PointId>(created->size());
-      np.point.p_w = keyframe.T_w_c * camera.unproject(uv, *depth);
-      np.point.source_keyframe = keyframe.id;
-      np.point.source_level = level;
-      np.point.source_uv = uv;
-      np.measurement = Measurement{np.point.id, uv, level, *depth};
+      np.point = MapPoint(MapPointData{id, keyframe.T_w_c * camera.unproject(uv, *depth),
+                                       keyframe.id, uv, level});
+      np.measurement = Measurement{id, uv, level, *depth};
       created->push_back(np);
       grid->occupy(uv);
       ++added;
@@ -128,11 +143,11 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   std::vector<NewPoint> created;
   if (keyframe.depth.empty()) return created;
   SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
-  for (const auto& [point_id, m] : keyframe.measurements) grid.occupy(m.uv);
+  for (const auto& [point_id, m] : keyframe.measurements()) grid.occupy(m.uv);
   const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
   addPointsFromDepth(keyframe, camera, options, options.min_shi_tomasi, SIZE_MAX, first_id, dense,
                      &grid, &created);
-  const size_t measured = keyframe.measurements.size() + created.size();
+  const size_t measured = keyframe.measurements().size() + created.size();
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
   if (measured < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
     // The second pass sees the strong corners again; they are taken or not free any more.

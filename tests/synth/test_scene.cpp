@@ -1,4 +1,4 @@
-#include "rgbdslam/io/synthetic_scene.h"
+#include "rgbdslam/synth/scene.h"
 
 #include <gtest/gtest.h>
 
