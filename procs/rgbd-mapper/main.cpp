@@ -41,8 +41,8 @@ Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli) {
   for (auto [name, target] : {std::pair{"map-period", &o.map_period_s},
                               std::pair{"snapshot-period", &o.snapshot_period_s},
                               std::pair{"status-period", &o.status_period_s}}) {
-    auto value = cli.getDouble(name);
-    if (!value || *value <= 0) return Error{std::string("--") + name + " must be a positive number of seconds"};
+    auto value = cli.getDouble(name, 1e-3, kMaxPeriodS);
+    if (!value) return Error{value.error() + " [s]"};
     *target = *value;
   }
   return o;
