@@ -56,6 +56,7 @@ void MapperOptions::bind(OptionRegistry* r) {
   r->bind(b, "parameter_tolerance", &ba.parameter_tolerance, 0.0, 1.0, "-", "stop when |step| / |x| is below");
   r->bind(b, "num_threads", &ba.num_threads, 1, 64, "threads", "Ceres threads");
   r->bind(b, "dense_schur_max_poses", &ba.dense_schur_max_poses, 1, 10000, "poses", "automatic solver: dense Schur up to this many free poses");
+  for (auto [low, high] : {std::pair{"min_depth_m", "max_depth_m"}, {"epipolar_min_depth_m", "epipolar_max_depth_m"}}) r->requireBelow(m, low, high);
 }
 
 const char* toString(MapperResult::Status status) {

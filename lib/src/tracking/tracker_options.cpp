@@ -3,6 +3,22 @@
 #include "rgbdslam/tracking/tracker.h"
 
 namespace rgbdslam {
+namespace {
+
+// Options that only make sense together; a contradiction leaves nothing to track.
+void bindRules(TrackerOptions* o, OptionRegistry* r) {
+  r->requireBelow("tracker", "keyframe_min_depth_m", "keyframe_max_depth_m");
+  r->require("tracker.quality_lost must not exceed tracker.quality_good",
+             [o] { return o->quality_lost <= o->quality_good; });
+  r->require("tracker.min_points_tracked must not exceed tracker.fine_max_points (no frame could be tracked)",
+             [o] { return o->min_points_tracked <= o->fine_max_points; });
+  r->require("tracker.init_min_points must not exceed kMaxLevels (4) times tracker.depth_points_per_level (the map could never start)",
+             [o] { return o->init_min_points <= kMaxLevels * o->depth_points.max_points_per_level; });
+  r->require("tracker.max_robust_sigma must be 0 (no cap) or at least tracker.min_robust_sigma",
+             [o] { return o->max_robust_sigma == 0 || o->max_robust_sigma >= o->min_robust_sigma; });
+}
+
+}  // namespace
 
 void TrackerOptions::bind(OptionRegistry* r) {
   const std::string s = "tracker";
@@ -113,6 +129,7 @@ void TrackerOptions::bind(OptionRegistry* r) {
           "a spread of the 3x3 window's depths above this (relative to the corner's) rejects the corner");
   r->bind(s, "depth_points_dense_fraction", &depth_points.dense_depth_fraction, 0.0, 1.0, "fraction",
           "with at least this fraction of pixels valid, a missing 3x3 neighbour rejects a corner");
+  bindRules(this, r);
 }
 
 }  // namespace rgbdslam

@@ -2,13 +2,20 @@
 // One loader for every component's options. Each options struct (defaults in-class) binds
 // its fields here with a unit and a meaning; load() reads a YAML file (OpenCV FileStorage)
 // with one mapping per section and rejects unknown sections, unknown keys and ill-typed or
-// out-of-range values, naming the key and the file; describe() prints the effective
-// configuration. Call order: bind all fields, load() (optional), describe().
+// out-of-range values, naming the key and the file (also a file whose top level is not a
+// mapping); describe() prints the effective configuration. Options that depend on each other
+// (a minimum and its maximum) are checked together by validate(), once every value is set.
+// Call order: bind all fields and rules, load() (optional), set() (optional), validate(),
+// describe().
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "rgbdslam/util/expected.h"
+
+namespace cv {
+class FileNode;
+}
 
 namespace rgbdslam {
 
@@ -23,6 +30,14 @@ class OptionRegistry {
   // A string restricted to 'choices'.
   void bind(const std::string& section, const std::string& key, std::string* field,
             const std::vector<std::string>& choices, const std::string& help);
+
+  // A rule between options, checked by validate(): 'holds' is true when the values agree;
+  // 'what' states the rule in words, naming the keys ("tracker.a must be below tracker.b").
+  void require(const std::string& what, std::function<bool()> holds);
+  // The rule "section.low < section.high" for two numeric options bound before.
+  void requireBelow(const std::string& section, const std::string& low, const std::string& high);
+  // Every rule; the first broken one is an error that shows the values involved.
+  Status validate() const;
 
   Status load(const std::string& path);
   // Sets one option from "section.key=value" (command-line overrides).
@@ -40,8 +55,16 @@ class OptionRegistry {
     std::function<Status(const std::string&)> parse;  // from text
     std::function<std::string()> show;
   };
+  struct Rule {
+    std::string what;
+    std::function<bool()> holds;
+  };
   Entry* find(const std::string& section, const std::string& key);
+  const Entry* find(const std::string& section, const std::string& key) const;
+  Status loadSections(const cv::FileNode& root, const std::string& path);
+  std::string valuesIn(const std::string& text) const;
   std::vector<Entry> entries_;
+  std::vector<Rule> rules_;
 };
 
 }  // namespace rgbdslam
