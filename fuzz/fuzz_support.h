@@ -7,7 +7,8 @@
 
 namespace rgbdslam::fuzz {
 
-// /tmp/rgbdslam-fuzz-PID/NAME (the folder is made once per process).
+// /dev/shm/rgbdslam-fuzz-PID/NAME (/tmp without /dev/shm); the folder is made once per
+// process and removed when it exits normally.
 std::string scratchPath(const std::string& name);
 // Writes size bytes to path (truncating); aborts when the scratch file cannot be written,
 // since every later run would test nothing.
