@@ -13,12 +13,6 @@ using test::encode;
 
 RgbdFrame makeFrame() { return test::sampleFrame(); }
 
-SE3 somePose() {
-  Vec6 xi;
-  xi << 0.5, -1.0, 2.0, 0.1, -0.3, 0.2;
-  return SE3::exp(xi);
-}
-
 TEST(LcmConversions, FrameRoundTripIsExactForRawAndZlib) {
   const RgbdFrame frame = makeFrame();
   for (bool zlib : {false, true}) {
@@ -91,14 +85,8 @@ TEST(LcmConversions, NegativeArraySizeIsRejectedWithoutThrowing) {
 }
 
 TEST(LcmConversions, PoseRoundTrip) {
-  PoseEstimate pose;
-  pose.utime = 123;
-  pose.seq = 7;
-  pose.T_w_c = somePose();
+  PoseEstimate pose = test::samplePose();
   pose.state = TrackingState::kDodgy;
-  pose.points_tracked = 150;
-  pose.quality = 0.5;
-  pose.latency_ms = 3.25;
   auto back = fromLcm(toLcm(pose, 1));
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->pose.state, TrackingState::kDodgy);

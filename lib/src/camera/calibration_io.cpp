@@ -5,12 +5,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <optional>
+
+#include "rgbdslam/util/yaml_file.h"
 
 namespace rgbdslam {
 namespace {
 
 struct KeyReader {
-  const cv::FileStorage& fs;
+  const cv::FileNode& fs;  // the file's top level (a mapping)
   const std::string& path;
   std::string error;
 
@@ -86,7 +89,7 @@ void readDistortion(KeyReader& reader, PinholeCamera& camera) {
   camera.k3 = reader.number({"Camera.k3"}, false);
 }
 
-Expected<PinholeCamera> readCamera(const cv::FileStorage& fs, const std::string& path) {
+Expected<PinholeCamera> readCamera(const cv::FileNode& fs, const std::string& path) {
   KeyReader reader{fs, path, {}};
   PinholeCamera camera;
   if (reader.has("name") && fs["name"].isString()) {
@@ -115,20 +118,14 @@ Expected<PinholeCamera> readCamera(const cv::FileStorage& fs, const std::string&
 }  // namespace
 
 Expected<PinholeCamera> loadCamera(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) return Error{path + ": camera file not found"};
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(path, cv::FileStorage::READ)) return Error{path + ": cannot be read as YAML"};
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a valid OpenCV YAML file (" + e.msg + ")"};
-  }
-  // FileNode lookups assert on a top level that is not a mapping (a list, a scalar).
-  if (!fs.root().isMap()) return Error{path + ": the top level must be a mapping of keys (fx: ..., image_width: ...), not a list or a value"};
-  try {
-    return readCamera(fs, path);
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a camera file (" + e.msg + ")"};
-  }
+  std::optional<Expected<PinholeCamera>> camera;
+  const Status read = readYamlMapping(path, "camera", "keys such as fx: ..., image_width: ...",
+                                      [&](const cv::FileNode& root) {
+                                        camera = readCamera(root, path);
+                                        return *camera ? Status{} : Status(Error{camera->error()});
+                                      });
+  if (!read) return Error{read.error()};
+  return *camera;
 }
 
 }  // namespace rgbdslam

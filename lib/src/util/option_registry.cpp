@@ -1,5 +1,7 @@
 #include "rgbdslam/util/option_registry.h"
 
+#include "rgbdslam/util/yaml_file.h"
+
 #include <cassert>
 #include <cctype>
 #include <cerrno>
@@ -113,20 +115,8 @@ OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const st
 }
 
 Status OptionRegistry::load(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) return Error{path + ": configuration file not found"};
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(path, cv::FileStorage::READ)) return Error{path + ": cannot be read as YAML"};
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a valid OpenCV YAML file (" + e.msg + ")"};
-  }
-  // FileNode lookups assert on a top level that is not a mapping (a list, a scalar).
-  if (!fs.root().isMap()) return Error{path + ": the top level must be a mapping of sections (tracker: ...), not a list or a value"};
-  try {
-    return loadSections(fs.root(), path);
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a configuration file (" + e.msg + ")"};
-  }
+  return readYamlMapping(path, "configuration", "sections such as tracker: ...",
+                         [&](const cv::FileNode& root) { return loadSections(root, path); });
 }
 
 Status OptionRegistry::loadSections(const cv::FileNode& root, const std::string& path) {
