@@ -174,7 +174,10 @@ TEST(TumDataset, TimestampsBeyondTheBoundAreRejected) {
   for (const char* stamp : {"1e13", "-5", "9.3e12"}) {
     test::TempDir dir;
     writeSequence(dir.path(), 3);
-    std::ofstream(dir.path() + "/depth.txt", std::ios::app) << stamp << " rgb/missing.png\n";
+    std::ifstream listed(dir.path() + "/depth.txt");
+    std::string first_time, existing;  // a file that exists: only the stamp is wrong
+    listed >> first_time >> existing;
+    std::ofstream(dir.path() + "/depth.txt", std::ios::app) << stamp << " " << existing << "\n";
     auto source = openTumDataset(dir.path(), smallCamera());
     ASSERT_FALSE(source) << stamp;
     EXPECT_NE(source.error().find("depth.txt:4"), std::string::npos) << source.error();
