@@ -106,6 +106,20 @@ TEST(OptionRegistry, TopLevelListOrValueIsAnErrorNamingTheFile) {
   EXPECT_NE(loaded.error().find("top level must be a mapping"), std::string::npos) << loaded.error();
 }
 
+// Found by fuzz_config (minimised): OpenCV's YAML parser threw std::length_error, which
+// nothing caught (std::terminate).
+TEST(OptionRegistry, ParserExceptionsOtherThanOpenCvsAreErrors) {
+  test::TempDir dir;
+  const std::string path = dir.file("c.yaml");
+  std::ofstream(path) << "%YAML:1.\n n:0\n :";
+  SlamOptions slam;
+  OptionRegistry r;
+  slam.bind(&r);
+  const Status loaded = r.load(path);
+  ASSERT_FALSE(loaded);
+  EXPECT_NE(loaded.error().find(path), std::string::npos) << loaded.error();
+}
+
 TEST(OptionRegistry, ContradictoryRangesAreRejectedTogether) {
   SlamOptions slam;
   OptionRegistry r;

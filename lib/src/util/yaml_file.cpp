@@ -18,6 +18,8 @@ Status readYamlMapping(const std::string& path, const std::string& what, const s
     return read(fs.root());
   } catch (const cv::Exception& e) {
     return Error{path + ": not a valid " + what + " file (" + e.msg + ")"};
+  } catch (const std::exception& e) {  // OpenCV's parser also lets std::length_error through
+    return Error{path + ": not a valid " + what + " file (" + e.what() + ")"};
   }
 }
 
