@@ -1,6 +1,7 @@
 #include "common/cli.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <sstream>
 
@@ -90,12 +91,32 @@ std::string CommandLine::get(const std::string& name) const {
   return specs_.at(name).default_value;
 }
 
+namespace {
+
+std::string numberText(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+}  // namespace
+
 Expected<double> CommandLine::getDouble(const std::string& name) const {
   const std::string text = get(name);
   char* end = nullptr;
   errno = 0;
   const double value = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || errno != 0) return Error{"--" + name + ": '" + text + "' is not a number"};
+  if (!std::isfinite(value)) return Error{"--" + name + ": '" + text + "' is not a finite number"};
+  return value;
+}
+
+Expected<double> CommandLine::getDouble(const std::string& name, double min, double max) const {
+  auto value = getDouble(name);
+  if (!value) return value;
+  if (*value < min || *value > max) {
+    return Error{"--" + name + ": " + get(name) + " is outside [" + numberText(min) + ", " + numberText(max) + "]"};
+  }
   return value;
 }
 
@@ -104,7 +125,18 @@ Expected<long> CommandLine::getInt(const std::string& name) const {
   char* end = nullptr;
   errno = 0;
   const long value = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno != 0) return Error{"--" + name + ": '" + text + "' is not a whole number"};
+  if (text.empty() || *end != '\0') return Error{"--" + name + ": '" + text + "' is not a whole number"};
+  if (errno == ERANGE) return Error{"--" + name + ": " + text + " is too large"};
+  if (errno != 0) return Error{"--" + name + ": '" + text + "' is not a whole number"};
+  return value;
+}
+
+Expected<long> CommandLine::getInt(const std::string& name, long min, long max) const {
+  auto value = getInt(name);
+  if (!value) return value;
+  if (*value < min || *value > max) {
+    return Error{"--" + name + ": " + get(name) + " is outside [" + std::to_string(min) + ", " + std::to_string(max) + "]"};
+  }
   return value;
 }
 

@@ -27,8 +27,12 @@ class CommandLine {
 
   bool has(const std::string& name) const;  // given on the command line (or a flag set)
   std::string get(const std::string& name) const;  // the value or its default
+  // Numbers: the whole text must parse; NaN, infinities and values beyond long are errors.
   Expected<double> getDouble(const std::string& name) const;
   Expected<long> getInt(const std::string& name) const;
+  // The same within [min, max]; the error names the option, the value and the range.
+  Expected<double> getDouble(const std::string& name, double min, double max) const;
+  Expected<long> getInt(const std::string& name, long min, long max) const;
   const std::string& positionalValue(size_t i) const { return positional_values_.at(i); }
 
  private:
@@ -48,6 +52,10 @@ class CommandLine {
 // The LCM URL every process accepts. The default stays on this host (ttl=0).
 // recv_buf_size: room for a few 640x480 frames (about 1.2 MB each) in the socket buffer; the
 // kernel caps it at net.core.rmem_max.
+// Periods and durations on the command line are bounded by a day: longer than any run, and
+// a period beyond it (or infinite) would silence the messages it paces.
+constexpr double kMaxPeriodS = 86400.0;  // [s]
+
 constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 void addLcmUrlOption(CommandLine& cli);
 

@@ -2,14 +2,16 @@
 
 #include <cmath>
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 
+#include "common/protocol_limits.h"
 #include "rgbdslam/image/codec.h"
 
 namespace rgbdslam {
 namespace {
 
-constexpr int kMaxImageSide = 8192;  // [px] larger claimed sizes are rejected as corrupt
+using limits::kMaxImageSide;
 
 void putPose(const SE3& T_w_c, double position[3], double orientation[4]) {
   const Vec3& t = T_w_c.translation();
@@ -18,15 +20,68 @@ void putPose(const SE3& T_w_c, double position[3], double orientation[4]) {
   orientation[0] = q.w(), orientation[1] = q.x(), orientation[2] = q.y(), orientation[3] = q.z();
 }
 
-Expected<SE3> getPose(const double position[3], const double orientation[4]) {
-  for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(position[i])) return Error{"position is not finite"};
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+// A position in the world: finite and within the protocol's world bound on every axis.
+Status checkWorld(const Vec3& p_w, const std::string& what) {
+  if (!p_w.allFinite()) return Error{what + " is not finite"};
+  if (p_w.cwiseAbs().maxCoeff() > limits::kMaxWorldCoordinateM) {
+    return Error{what + " (" + number(p_w.x()) + ", " + number(p_w.y()) + ", " + number(p_w.z()) +
+                 ") m is beyond the world bound of " + number(limits::kMaxWorldCoordinateM) + " m"};
   }
+  return Status{};
+}
+
+Expected<SE3> getPose(const double position[3], const double orientation[4]) {
+  if (Status s = checkWorld(Vec3(position[0], position[1], position[2]), "position"); !s) return Error{s.error()};
   const Eigen::Quaterniond q(orientation[0], orientation[1], orientation[2], orientation[3]);
-  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-3) {
+  if (!std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > limits::kQuaternionNormTolerance) {
     return Error{"orientation is not a unit quaternion"};
   }
   return SE3(q, Vec3(position[0], position[1], position[2]));
+}
+
+// A pyramid level the keyframe's pyramid has.
+Status checkLevel(int level, const std::string& what) {
+  if (level < 0 || level >= limits::kMaxLevels) {
+    return Error{what + " has pyramid level " + std::to_string(level) + ", outside [0, " +
+                 std::to_string(limits::kMaxLevels - 1) + "]"};
+  }
+  return Status{};
+}
+
+// A level-0 pixel inside a width x height image (pixel centres at whole numbers, so the
+// image covers [-0.5, width - 0.5) x [-0.5, height - 0.5)).
+Status checkPixel(double u, double v, int width, int height, const std::string& what) {
+  if (!(u >= -0.5 && u < width - 0.5 && v >= -0.5 && v < height - 0.5)) {
+    return Error{what + " pixel (" + number(u) + ", " + number(v) + ") is outside the " +
+                 std::to_string(width) + "x" + std::to_string(height) + " image"};
+  }
+  return Status{};
+}
+
+Status checkId(int64_t id, const std::string& what) {
+  if (id < 0) return Error{what + " has a negative id " + std::to_string(id)};
+  return Status{};
+}
+
+// A message built in memory (not decoded) may carry a count that disagrees with its array.
+Status checkCount(int64_t count, size_t actual, const char* field) {
+  if (count < 0 || static_cast<size_t>(count) != actual) {
+    return Error{std::string(field) + " is " + std::to_string(count) + " but the array holds " + std::to_string(actual)};
+  }
+  return Status{};
+}
+
+Status checkDepthScale(double scale) {
+  if (!(std::isfinite(scale) && scale > 0 && scale <= limits::kMaxDepthScale)) {
+    return Error{"depth_scale must be in (0, " + number(limits::kMaxDepthScale) + "], got " + number(scale)};
+  }
+  return Status{};
 }
 
 bool validSize(int width, int height) {
@@ -86,15 +141,22 @@ void encodeDepth(const cv::Mat& depth, bool zlib, int level, int8_t* format,
   }
 }
 
-Expected<MapPointData> fromLcm(const rgbdslam::map_point_t& msg) {
+// A map point; its pixel lies in a width x height source keyframe (the largest image when
+// the source keyframe's size is not at hand, as in map_t).
+Expected<MapPointData> fromLcm(const rgbdslam::map_point_t& msg, int width = kMaxImageSide,
+                               int height = kMaxImageSide) {
+  const std::string what = "point " + std::to_string(msg.point_id);
   MapPointData point;
   point.id = msg.point_id;
   point.p_w = Vec3(msg.position[0], msg.position[1], msg.position[2]);
-  if (!point.p_w.allFinite()) return Error{"point " + std::to_string(msg.point_id) + " position is not finite"};
   point.source_keyframe = msg.source_keyframe;
   point.uv = Eigen::Vector2d(msg.u, msg.v);
   point.level = msg.level;
-  if (!point.uv.allFinite() || msg.level < 0) return Error{"point " + std::to_string(msg.point_id) + " has a bad pixel or level"};
+  for (Status s : {checkId(msg.point_id, what), checkId(msg.source_keyframe, what + " source keyframe"),
+                   checkWorld(point.p_w, what + " position"), checkLevel(msg.level, what),
+                   checkPixel(msg.u, msg.v, width, height, what)}) {
+    if (!s) return Error{s.error()};
+  }
   return point;
 }
 
@@ -138,6 +200,11 @@ rgbdslam::rgbd_frame_t toLcm(const RgbdFrame& frame, const FrameEncoding& encodi
 
 Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg) {
   if (!validSize(msg.width, msg.height)) return Error{"bad frame size " + sizeText(msg.width, msg.height)};
+  for (Status s : {checkCount(msg.colour_size, msg.colour.size(), "colour_size"),
+                   checkCount(msg.depth_size, msg.depth.size(), "depth_size"),
+                   checkId(msg.seq, "frame sequence number")}) {
+    if (!s) return Error{"frame " + std::to_string(msg.seq) + ": " + s.error()};
+  }
   RgbdFrame frame;
   frame.utime = msg.utime;
   frame.seq = msg.seq;
@@ -161,17 +228,18 @@ Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg) {
   auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height);
   if (!depth) return Error{depth.error()};
   frame.depth = *depth;
-  if (!frame.depth.empty() && !(std::isfinite(msg.depth_scale) && msg.depth_scale > 0)) {
-    return Error{"depth_scale must be positive, got " + std::to_string(msg.depth_scale)};
+  if (!frame.depth.empty()) {
+    if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{s.error()};
   }
   if (frame.colour.empty() && frame.depth.empty()) return Error{"frame has neither colour nor depth"};
   return frame;
 }
 
-rgbdslam::pose_t toLcm(const PoseEstimate& pose) {
+rgbdslam::pose_t toLcm(const PoseEstimate& pose, int64_t map_id) {
   rgbdslam::pose_t msg;
   msg.utime = pose.utime;
   msg.seq = pose.seq;
+  msg.map_id = map_id;
   putPose(pose.T_w_c, msg.position, msg.orientation);
   msg.state = static_cast<int8_t>(pose.state);
   msg.points_tracked = pose.points_tracked;
@@ -180,13 +248,22 @@ rgbdslam::pose_t toLcm(const PoseEstimate& pose) {
   return msg;
 }
 
-Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg) {
+Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg) {
+  const std::string what = "pose " + std::to_string(msg.seq) + ": ";
   auto T_w_c = getPose(msg.position, msg.orientation);
-  if (!T_w_c) return Error{"pose: " + T_w_c.error()};
+  if (!T_w_c) return Error{what + T_w_c.error()};
   if (msg.state < rgbdslam::pose_t::STATE_INITIALISING || msg.state > rgbdslam::pose_t::STATE_RELOCALISED) {
-    return Error{"pose: unknown tracking state " + std::to_string(msg.state)};
+    return Error{what + "unknown tracking state " + std::to_string(msg.state)};
   }
-  PoseEstimate pose;
+  for (Status s : {checkId(msg.seq, "sequence number"), checkId(msg.map_id, "map")}) {
+    if (!s) return Error{what + s.error()};
+  }
+  if (msg.points_tracked < 0) return Error{what + "points_tracked is negative"};
+  if (!(msg.quality >= 0 && msg.quality <= 1)) return Error{what + "quality " + number(msg.quality) + " is outside [0, 1]"};
+  if (!std::isfinite(msg.latency_ms)) return Error{what + "latency is not finite"};
+  MapPose out;
+  out.map_id = msg.map_id;
+  PoseEstimate& pose = out.pose;
   pose.utime = msg.utime;
   pose.seq = msg.seq;
   pose.T_w_c = *T_w_c;
@@ -194,7 +271,7 @@ Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg) {
   pose.points_tracked = msg.points_tracked;
   pose.quality = msg.quality;
   pose.latency_ms = msg.latency_ms;
-  return pose;
+  return out;
 }
 
 namespace {
@@ -249,10 +326,72 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   return msg;
 }
 
+namespace {
+
+// The keyframe's counts, id, size and pose; the images and points come after.
+Status checkKeyframeHeader(const rgbdslam::keyframe_t& msg) {
+  for (Status s : {checkId(msg.keyframe_id, "keyframe"), checkId(msg.map_id, "map"),
+                   checkCount(msg.grey_size, msg.grey.size(), "grey_size"),
+                   checkCount(msg.depth_size, msg.depth.size(), "depth_size"),
+                   checkCount(msg.num_measurements, msg.measurements.size(), "num_measurements"),
+                   checkCount(msg.num_new_points, msg.new_points.size(), "num_new_points")}) {
+    if (!s) return s;
+  }
+  if (!validSize(msg.width, msg.height)) return Error{"bad size " + sizeText(msg.width, msg.height)};
+  return Status{};
+}
+
+Status decodeGrey(const rgbdslam::keyframe_t& msg, KeyframeData* keyframe) {
+  if (msg.grey_format == rgbdslam::keyframe_t::GREY_RAW_U8) {
+    if (msg.grey.size() != static_cast<size_t>(msg.width) * msg.height) return Error{"raw grey image has the wrong size"};
+    keyframe->grey = cv::Mat(msg.height, msg.width, CV_8UC1);
+    std::memcpy(keyframe->grey.data, msg.grey.data(), msg.grey.size());
+  } else if (msg.grey_format == rgbdslam::keyframe_t::GREY_JPEG || msg.grey_format == rgbdslam::keyframe_t::GREY_PNG) {
+    auto grey = decodeImage(msg.grey.data(), msg.grey.size(), 1, msg.width, msg.height);
+    if (!grey) return Error{"grey: " + grey.error()};
+    keyframe->grey = *grey;
+  } else {
+    return Error{"unknown grey format " + std::to_string(msg.grey_format)};
+  }
+  return Status{};
+}
+
+// A measurement of an existing point in this keyframe: id, pixel, level and depth in range.
+Expected<Measurement> fromLcm(const rgbdslam::measurement_t& m, int width, int height) {
+  const std::string what = "measurement of point " + std::to_string(m.point_id);
+  for (Status s : {checkId(m.point_id, what), checkLevel(m.level, what),
+                   checkPixel(m.u, m.v, width, height, what)}) {
+    if (!s) return Error{s.error()};
+  }
+  if (!(m.depth >= 0 && m.depth <= limits::kMaxDepthM)) {
+    return Error{what + " has depth " + number(m.depth) + " m, outside [0, " + number(limits::kMaxDepthM) + "]"};
+  }
+  return Measurement{m.point_id, Eigen::Vector2d(m.u, m.v), m.level, m.depth};
+}
+
+Status decodeKeyframePoints(const rgbdslam::keyframe_t& msg, KeyframeData* keyframe) {
+  for (const auto& m : msg.measurements) {
+    auto measurement = fromLcm(m, msg.width, msg.height);
+    if (!measurement) return Error{measurement.error()};
+    keyframe->measurements.push_back(*measurement);
+  }
+  for (const auto& p : msg.new_points) {
+    auto point = fromLcm(p, msg.width, msg.height);
+    if (!point) return Error{point.error()};
+    if (point->source_keyframe != msg.keyframe_id) {
+      return Error{"new point " + std::to_string(p.point_id) + " names keyframe " +
+                   std::to_string(point->source_keyframe) + " as its source"};
+    }
+    keyframe->new_points.push_back(*point);
+  }
+  return Status{};
+}
+
+}  // namespace
+
 Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   const std::string what = "keyframe " + std::to_string(msg.keyframe_id) + ": ";
-  if (msg.keyframe_id < 0) return Error{what + "negative id"};
-  if (!validSize(msg.width, msg.height)) return Error{what + "bad size " + sizeText(msg.width, msg.height)};
+  if (Status s = checkKeyframeHeader(msg); !s) return Error{what + s.error()};
   auto T_w_c = getPose(msg.position, msg.orientation);
   if (!T_w_c) return Error{what + T_w_c.error()};
   KeyframeData keyframe;
@@ -260,32 +399,15 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   keyframe.map_id = msg.map_id;
   keyframe.id = msg.keyframe_id;
   keyframe.T_w_c = *T_w_c;
-  if (msg.grey_format == rgbdslam::keyframe_t::GREY_RAW_U8) {
-    if (msg.grey.size() != static_cast<size_t>(msg.width) * msg.height) return Error{what + "raw grey image has the wrong size"};
-    keyframe.grey = cv::Mat(msg.height, msg.width, CV_8UC1);
-    std::memcpy(keyframe.grey.data, msg.grey.data(), msg.grey.size());
-  } else if (msg.grey_format == rgbdslam::keyframe_t::GREY_JPEG || msg.grey_format == rgbdslam::keyframe_t::GREY_PNG) {
-    auto grey = decodeImage(msg.grey.data(), msg.grey.size(), 1, msg.width, msg.height);
-    if (!grey) return Error{what + "grey: " + grey.error()};
-    keyframe.grey = *grey;
-  } else {
-    return Error{what + "unknown grey format " + std::to_string(msg.grey_format)};
-  }
+  if (Status s = decodeGrey(msg, &keyframe); !s) return Error{what + s.error()};
   auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height);
   if (!depth) return Error{what + depth.error()};
   keyframe.depth = *depth;
   keyframe.depth_scale = msg.depth_scale;
-  for (const auto& m : msg.measurements) {
-    if (!std::isfinite(m.u) || !std::isfinite(m.v) || m.level < 0 || !std::isfinite(m.depth) || m.depth < 0) {
-      return Error{what + "measurement of point " + std::to_string(m.point_id) + " is malformed"};
-    }
-    keyframe.measurements.push_back({m.point_id, Eigen::Vector2d(m.u, m.v), m.level, m.depth});
+  if (!keyframe.depth.empty()) {
+    if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{what + s.error()};
   }
-  for (const auto& p : msg.new_points) {
-    auto point = fromLcm(p);
-    if (!point) return Error{what + point.error()};
-    keyframe.new_points.push_back(*point);
-  }
+  if (Status s = decodeKeyframePoints(msg, &keyframe); !s) return Error{what + s.error()};
   return keyframe;
 }
 
@@ -318,30 +440,62 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
   return msg;
 }
 
+namespace {
+
+Status checkMapHeader(const rgbdslam::map_t& msg) {
+  for (Status s : {checkId(msg.map_id, "map"), checkCount(msg.num_acked, msg.acked_keyframes.size(), "num_acked"),
+                   checkCount(msg.num_keyframes, msg.keyframes.size(), "num_keyframes"),
+                   checkCount(msg.num_points, msg.points.size(), "num_points"),
+                   checkCount(msg.num_moved, msg.moved.size(), "num_moved"),
+                   checkCount(msg.num_removed, msg.removed_points.size(), "num_removed")}) {
+    if (!s) return s;
+  }
+  if (msg.version < 0) return Error{"negative version"};
+  for (int64_t id : msg.acked_keyframes) {
+    if (Status s = checkId(id, "acknowledged keyframe"); !s) return s;
+  }
+  for (int64_t id : msg.removed_points) {
+    if (Status s = checkId(id, "removed point"); !s) return s;
+  }
+  return Status{};
+}
+
+Status decodeMapContents(const rgbdslam::map_t& msg, MapUpdate* update) {
+  for (const auto& kf : msg.keyframes) {
+    const std::string what = "keyframe " + std::to_string(kf.keyframe_id);
+    if (Status s = checkId(kf.keyframe_id, what); !s) return s;
+    auto T_w_c = getPose(kf.position, kf.orientation);
+    if (!T_w_c) return Error{what + " " + T_w_c.error()};
+    update->keyframes.push_back({kf.keyframe_id, *T_w_c});
+  }
+  for (const auto& p : msg.points) {
+    auto point = fromLcm(p);
+    if (!point) return Error{point.error()};
+    update->points.push_back(*point);
+  }
+  for (const auto& moved : msg.moved) {
+    const std::string what = "moved point " + std::to_string(moved.point_id);
+    const Vec3 p_w(moved.position[0], moved.position[1], moved.position[2]);
+    for (Status s : {checkId(moved.point_id, what), checkWorld(p_w, what + " position")}) {
+      if (!s) return s;
+    }
+    update->moved_points.push_back({moved.point_id, p_w});
+  }
+  return Status{};
+}
+
+}  // namespace
+
 Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg) {
   const std::string what = "map version " + std::to_string(msg.version) + ": ";
-  if (msg.version < 0) return Error{what + "negative version"};
+  if (Status s = checkMapHeader(msg); !s) return Error{what + s.error()};
   MapUpdate update;
   update.utime = msg.utime;
   update.map_id = msg.map_id;
   update.version = msg.version;
   update.is_snapshot = msg.is_snapshot;
   update.acked_keyframes = msg.acked_keyframes;
-  for (const auto& kf : msg.keyframes) {
-    auto T_w_c = getPose(kf.position, kf.orientation);
-    if (!T_w_c) return Error{what + "keyframe " + std::to_string(kf.keyframe_id) + " " + T_w_c.error()};
-    update.keyframes.push_back({kf.keyframe_id, *T_w_c});
-  }
-  for (const auto& p : msg.points) {
-    auto point = fromLcm(p);
-    if (!point) return Error{what + point.error()};
-    update.points.push_back(*point);
-  }
-  for (const auto& moved : msg.moved) {
-    const Vec3 p_w(moved.position[0], moved.position[1], moved.position[2]);
-    if (!p_w.allFinite()) return Error{what + "moved point " + std::to_string(moved.point_id) + " position is not finite"};
-    update.moved_points.push_back({moved.point_id, p_w});
-  }
+  if (Status s = decodeMapContents(msg, &update); !s) return Error{what + s.error()};
   update.removed_points = msg.removed_points;
   return update;
 }
@@ -397,6 +551,12 @@ rgbdslam::status_t toLcm(const ComponentStatus& status) {
 }
 
 Expected<ComponentStatus> fromLcm(const rgbdslam::status_t& msg) {
+  for (Status s : {checkCount(msg.num_counters, msg.counter_names.size(), "num_counters"),
+                   checkCount(msg.num_counters, msg.counter_values.size(), "num_counters"),
+                   checkCount(msg.num_timings, msg.timing_names.size(), "num_timings"),
+                   checkCount(msg.num_timings, msg.timing_values_ms.size(), "num_timings")}) {
+    if (!s) return Error{"status of " + msg.component + ": " + s.error()};
+  }
   ComponentStatus status;
   status.utime = msg.utime;
   status.component = msg.component;

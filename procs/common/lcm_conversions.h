@@ -1,7 +1,10 @@
 #pragma once
 // Conversions between the library's plain types and the LCM messages (lcmtypes/).
-// Handlers call only these: fromLcm() validates everything a message claims (sizes,
-// formats, finiteness) and returns an error instead of trusting it.
+// Handlers call only these: decodeMessage<T>() checks the wire layout before liblcm decodes
+// (wire_check.h), then fromLcm() checks every field's range (protocol_limits.h): sizes that
+// match, formats, finite values, ids >= 0, pyramid levels < kMaxLevels, pixels inside the
+// image, unit quaternions, positions and depths within the world bound. Each returns an
+// error naming the field instead of trusting the message.
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -18,6 +21,7 @@
 #include "rgbdslam/tracking/pose_estimate.h"
 #include "rgbdslam/util/component_status.h"
 #include "rgbdslam/util/expected.h"
+#include "common/wire_check.h"
 
 namespace rgbdslam {
 
@@ -32,8 +36,14 @@ struct FrameEncoding {
 rgbdslam::rgbd_frame_t toLcm(const RgbdFrame& frame, const FrameEncoding& encoding);
 Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg);
 
-rgbdslam::pose_t toLcm(const PoseEstimate& pose);
-Expected<PoseEstimate> fromLcm(const rgbdslam::pose_t& msg);
+// A pose as it travels: the estimate and the map it is expressed in (keyframe_t.map_id), so
+// a listener can keep two trackers on one bus apart.
+struct MapPose {
+  int64_t map_id = 0;
+  PoseEstimate pose;
+};
+rgbdslam::pose_t toLcm(const PoseEstimate& pose, int64_t map_id);
+Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg);
 
 // How keyframes are encoded on the wire. The default is lossless (what tests compare); the
 // tracker process sends JPEG grey and half-resolution depth by default to keep the radio link
@@ -56,28 +66,26 @@ Expected<MapReceipt> fromLcm(const rgbdslam::map_receipt_t& msg);
 rgbdslam::status_t toLcm(const ComponentStatus& status);
 Expected<ComponentStatus> fromLcm(const rgbdslam::status_t& msg);
 
-// Decodes raw bytes as message type T. Rejects truncated data, trailing bytes (oversized or
-// a different type with a matching prefix) and a wrong type fingerprint, with a message.
-// The generated decoders resize arrays to the sizes a message claims; a negative or absurd
-// size throws (length_error, bad_alloc), which is caught here and reported like a bad message.
+// Decodes raw bytes as message type T. The wire check (wire_check.h) runs first: it rejects
+// truncated data, trailing bytes (oversized or a different type with a matching prefix), a
+// wrong type fingerprint, and counts or lengths that are negative, beyond the protocol's
+// limits or not backed by bytes, before liblcm's decoder allocates anything.
 template <typename T>
 Expected<T> decodeMessage(const void* data, size_t size) {
-  T msg;
   if (size > static_cast<size_t>(std::numeric_limits<int>::max())) {
     return Error{"message of " + std::to_string(size) + " bytes is too large"};
   }
+  if (Status wire = checkWire<T>(data, size); !wire) return Error{wire.error()};
+  T msg;
   int used = -1;
   try {
     used = msg.decode(data, 0, static_cast<int>(size));
-  } catch (const std::exception& e) {
-    return Error{"message claims impossible array sizes for " + std::string(T::getTypeName()) +
-                 " (" + e.what() + ")"};
+  } catch (const std::exception& e) {  // not expected after the wire check; kept as a backstop
+    return Error{"message does not decode as " + std::string(T::getTypeName()) + " (" + e.what() + ")"};
   }
-  if (used < 0) return Error{"message does not decode as " + std::string(T::getTypeName()) +
-                             " (truncated, or another type), " + std::to_string(size) + " bytes"};
-  if (static_cast<size_t>(used) != size) {
-    return Error{"message has " + std::to_string(size - used) + " bytes beyond a " +
-                 std::string(T::getTypeName()) + " (oversized or another type)"};
+  if (used < 0 || static_cast<size_t>(used) != size) {
+    return Error{"message does not decode as " + std::string(T::getTypeName()) + ", " +
+                 std::to_string(size) + " bytes"};
   }
   return msg;
 }

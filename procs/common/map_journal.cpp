@@ -7,8 +7,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 
 namespace rgbdslam {
 namespace {
@@ -37,17 +35,43 @@ std::string errnoText(const std::string& what, const std::string& path) {
   return what + " " + path + ": " + std::strerror(errno);
 }
 
+// The whole journal; none yet is empty. Anything but a regular file (a directory, a FIFO, a
+// device) is an error: reading a directory through a stream throws.
+Expected<std::vector<uint8_t>> readJournal(const std::string& path) {
+  std::vector<uint8_t> bytes;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) {
+    if (errno == ENOENT) return bytes;
+    return Error{errnoText("cannot open", path)};
+  }
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    return Error{path + ": is not a regular file (a directory or a device?); move it aside or use --fresh"};
+  }
+  uint8_t chunk[1 << 16];
+  for (ssize_t n; (n = ::read(fd, chunk, sizeof chunk)) != 0;) {
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const std::string error = errnoText("cannot read", path);
+      ::close(fd);
+      return Error{error};
+    }
+    bytes.insert(bytes.end(), chunk, chunk + n);
+  }
+  ::close(fd);
+  return bytes;
+}
+
 }  // namespace
 
 Expected<MapJournal> MapJournal::open(const std::string& dir, Contents* contents) {
   if (::mkdir(dir.c_str(), 0755) != 0 && errno != EEXIST) return Error{errnoText("cannot create", dir)};
   const std::string path = dir + "/map.journal";
   *contents = Contents{};
-  std::vector<uint8_t> bytes;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (in) bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  auto read = readJournal(path);
+  if (!read) return Error{read.error()};
+  const std::vector<uint8_t>& bytes = *read;
   size_t offset = 0;
   while (offset < bytes.size()) {
     const uint8_t* record = bytes.data() + offset;

@@ -38,6 +38,9 @@ Expected<SlamConfig> loadSlamConfig(const CommandLine& cli) {
   if (cli.has("mode")) {
     if (Status s = config.registry->set("slam.mode=" + cli.get("mode")); !s) return Error{"--mode: " + s.error()};
   }
+  if (Status s = config.registry->validate(); !s) {
+    return Error{(cli.has("config") ? cli.get("config") + " with --set/--mode: " : "") + s.error()};
+  }
   return config;
 }
 

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -76,11 +77,18 @@ PoseLogWriter::~PoseLogWriter() {
 Status PoseLogWriter::write(const PoseEstimate& pose) {
   const Vec3& t = pose.T_w_c.translation();
   const Eigen::Quaterniond& q = pose.T_w_c.rotation();
-  char csv[512];
-  std::snprintf(csv, sizeof(csv), "%lld,%lld,%s,%d,%.4f,%.3f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
-                static_cast<long long>(pose.utime), static_cast<long long>(pose.seq),
-                toString(pose.state), pose.points_tracked, pose.quality, pose.latency_ms, t.x(),
-                t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  if (!t.allFinite() || !q.coeffs().allFinite() || !std::isfinite(pose.quality) || !std::isfinite(pose.latency_ms)) {
+    return Error{"pose " + std::to_string(pose.seq) + " has a value that is not finite: not written"};
+  }
+  // Sized by a first pass, so no line is ever cut (a position of 1e200 m prints 200 digits).
+  const auto print = [&](char* out, size_t size) {
+    return std::snprintf(out, size, "%lld,%lld,%s,%d,%.4f,%.3f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
+                         static_cast<long long>(pose.utime), static_cast<long long>(pose.seq),
+                         toString(pose.state), pose.points_tracked, pose.quality, pose.latency_ms,
+                         t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  };
+  std::string csv(static_cast<size_t>(print(nullptr, 0)), '\0');
+  print(csv.data(), csv.size() + 1);
   if (Status s = writeLine(csv_fd_, csv, csv_path_); !s) return s;
   ++csv_lines_;
   if (!vouchedFor(pose.state)) return {};
@@ -88,6 +96,23 @@ Status PoseLogWriter::write(const PoseEstimate& pose) {
   if (Status s = writeLine(trajectory_fd_, line, trajectory_path_); !s) return s;
   ++trajectory_lines_;
   return {};
+}
+
+MapFilter::MapFilter(std::optional<int64_t> map_id) : map_id_(map_id) {}
+
+bool MapFilter::accept(int64_t map_id) {
+  if (!map_id_) map_id_ = map_id;
+  if (map_id == *map_id_) return true;
+  ++other_poses_;
+  if (other_maps_.size() < kMaxListedMaps) other_maps_.insert(map_id);
+  return false;
+}
+
+std::string MapFilter::describeOthers() const {
+  std::string ids;
+  for (int64_t id : other_maps_) ids += (ids.empty() ? "" : " ") + std::to_string(id);
+  if (other_poses_ > 0 && other_maps_.size() == kMaxListedMaps) ids += " ...";
+  return std::to_string(other_poses_) + " poses of other maps" + (ids.empty() ? "" : " (" + ids + ")");
 }
 
 }  // namespace rgbdslam

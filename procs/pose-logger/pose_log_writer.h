@@ -3,7 +3,11 @@
 // and latency. Each line goes to the file in one write(2) on an O_APPEND descriptor, so a
 // SIGKILL loses at most the line being written and never leaves a partial line.
 // The TUM file holds only poses the tracker vouches for (tracking, dodgy, relocalised);
-// the CSV holds every pose, including initialising and lost ones.
+// the CSV holds every pose, including initialising and lost ones. Lines are as long as their
+// numbers need; a pose with a value that is not finite is refused with an error.
+#include <cstdint>
+#include <optional>
+#include <set>
 #include <string>
 
 #include "rgbdslam/tracking/pose_estimate.h"
@@ -27,6 +31,24 @@ class PoseLogWriter {
   int trajectory_fd_ = -1, csv_fd_ = -1;
   std::string trajectory_path_, csv_path_;
   long trajectory_lines_ = 0, csv_lines_ = 0;
+};
+
+// Keeps one map's poses: the map given, or else the first one seen. Each map has its own
+// world frame, so two trackers' poses in one trajectory would be meaningless; poses of any
+// other map are refused and counted (the first kMaxListedMaps other ids are listed).
+class MapFilter {
+ public:
+  static constexpr size_t kMaxListedMaps = 8;
+  explicit MapFilter(std::optional<int64_t> map_id = std::nullopt);
+  bool accept(int64_t map_id);  // true: this pose belongs to the logged map
+  std::optional<int64_t> mapId() const { return map_id_; }
+  long otherPoses() const { return other_poses_; }
+  std::string describeOthers() const;  // "N poses of other maps (id id ...)"
+
+ private:
+  std::optional<int64_t> map_id_;
+  long other_poses_ = 0;
+  std::set<int64_t> other_maps_;
 };
 
 // "TRAJ.txt" -> "TRAJ.csv" (or TRAJ + ".csv" when there is no extension).

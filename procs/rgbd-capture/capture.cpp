@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -22,8 +23,8 @@ Expected<CaptureOptions> CaptureOptions::fromCommandLine(const CommandLine& cli)
   o.source = cli.get("source");
   o.camera_path = cli.get("camera");
   if (cli.has("rate")) {
-    auto rate = cli.getDouble("rate");
-    if (!rate || *rate < 0) return Error{"--rate must be a number >= 0"};
+    auto rate = cli.getDouble("rate", 0.0, kMaxRateHz);
+    if (!rate) return Error{rate.error() + " [frames/s]"};
     o.rate_hz = *rate;
   }
   o.step = cli.has("step");
@@ -33,11 +34,11 @@ Expected<CaptureOptions> CaptureOptions::fromCommandLine(const CommandLine& cli)
   if (depth != "raw" && depth != "zlib") return Error{"--depth must be raw or zlib"};
   o.encoding.jpeg_colour = colour == "jpeg";
   o.encoding.zlib_depth = depth == "zlib";
-  auto quality = cli.getInt("jpeg-quality");
-  if (!quality || *quality < 1 || *quality > 100) return Error{"--jpeg-quality must be 1-100"};
+  auto quality = cli.getInt("jpeg-quality", 1, 100);
+  if (!quality) return Error{quality.error()};
   o.encoding.jpeg_quality = static_cast<int>(*quality);
-  auto max_frames = cli.getInt("max-frames");
-  if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
+  auto max_frames = cli.getInt("max-frames", 0, std::numeric_limits<long>::max());
+  if (!max_frames) return Error{max_frames.error()};
   o.max_frames = *max_frames;
   o.lcm_url = cli.get("lcm-url");
   o.groundtruth_out = cli.get("groundtruth-out");
@@ -134,21 +135,36 @@ bool Capture::waitForTurn(const RgbdFrame& frame, const std::atomic<bool>& stop)
     return static_cast<bool>(std::getline(std::cin, line)) && !stop;
   }
   const int64_t now = utimeNow();
-  if (published_ == 0) {
-    first_utime_ = frame.utime;
+  if (published_ == 0 || !paceableGap(frame)) {
+    first_utime_ = last_utime_ = frame.utime;
     first_wall_us_ = now;
+    first_published_ = published_;
     return !stop;
   }
+  last_utime_ = frame.utime;
   int64_t due = now;
   if (!options_.rate_hz) {
     if (source_->nominalRateHz() > 0) due = first_wall_us_ + (frame.utime - first_utime_);
   } else if (*options_.rate_hz > 0) {
-    due = first_wall_us_ + static_cast<int64_t>(published_ * 1e6 / *options_.rate_hz);
+    due = first_wall_us_ + static_cast<int64_t>((published_ - first_published_) * 1e6 / *options_.rate_hz);
   }
   for (int64_t wait = due - utimeNow(); wait > 0 && !stop; wait = due - utimeNow()) {
     std::this_thread::sleep_for(std::chrono::microseconds(std::min(wait, kSleepSliceUs)));
   }
   return !stop;
+}
+
+// Pacing by recorded timestamps: a recorded gap to the previous frame beyond kMaxPacedGapS,
+// or a step back in time, is not waited for. It is reported, and pacing starts again from
+// this frame (a recording's clock jump or a corrupt stamp must not stall the capture).
+bool Capture::paceableGap(const RgbdFrame& frame) {
+  if (options_.rate_hz || options_.step || source_->nominalRateHz() <= 0) return true;
+  const double gap_s = (static_cast<double>(frame.utime) - static_cast<double>(last_utime_)) * 1e-6;
+  if (gap_s >= 0 && gap_s <= kMaxPacedGapS) return true;
+  std::cerr << "rgbd-capture: frame " << frame.seq << " is stamped " << gap_s << " s after the previous one"
+            << " (beyond [0, " << kMaxPacedGapS << "] s): not waiting for it, pacing restarts at this frame\n";
+  ++pacing_restarts_;
+  return false;
 }
 
 int Capture::run(const std::atomic<bool>& stop) {
@@ -188,7 +204,9 @@ int Capture::run(const std::atomic<bool>& stop) {
       failed = true;
     }
   }
-  std::cerr << "rgbd-capture: published " << published_ << " frames, " << bad_ << " bad\n";
+  std::cerr << "rgbd-capture: published " << published_ << " frames, " << bad_ << " bad";
+  if (pacing_restarts_ > 0) std::cerr << ", pacing restarted " << pacing_restarts_ << " times at gaps in the recording";
+  std::cerr << "\n";
   return (failed || bad_ > 0) ? 1 : 0;
 }
 

@@ -16,6 +16,13 @@
 
 namespace rgbdslam {
 
+// Largest publishing rate --rate accepts: 10 kHz is 300x a camera's 30 Hz.
+constexpr double kMaxRateHz = 10000.0;  // [frames/s]
+// Largest recorded gap between two frames that pacing by recorded timestamps waits for:
+// a minute is beyond any sensor dropout; a larger gap (31 years from a corrupt stamp) or
+// a step back is reported and pacing restarts at that frame.
+constexpr double kMaxPacedGapS = 60.0;  // [s]
+
 struct CaptureOptions {
   std::string source;                 // source spec (tum:, synth:, openni2:, lcmlog:)
   std::string camera_path;            // calibration file; empty = none
@@ -49,6 +56,7 @@ class Capture {
           std::unique_ptr<FrameSource> source, std::unique_ptr<lcm::LCM> lcm);
   std::string checkAgainstCamera(const RgbdFrame& frame) const;  // empty when fine
   bool waitForTurn(const RgbdFrame& frame, const std::atomic<bool>& stop);
+  bool paceableGap(const RgbdFrame& frame);  // false: report the gap and restart pacing
 
   CaptureOptions options_;
   std::optional<PinholeCamera> camera_;
@@ -58,7 +66,9 @@ class Capture {
   std::optional<Trajectory> groundtruth_;  // to write, when --groundtruth-out is given
   std::vector<std::pair<int64_t, int64_t>> stamps_;  // (recorded, host) utime per published frame
   long published_ = 0, bad_ = 0;
-  int64_t first_utime_ = 0, first_wall_us_ = 0;
+  int64_t first_utime_ = 0, first_wall_us_ = 0;  // pacing's anchor: a frame and when it went out
+  int64_t last_utime_ = 0;                         // the previous paced frame's stamp
+  long first_published_ = 0, pacing_restarts_ = 0;
 };
 
 }  // namespace rgbdslam

@@ -38,8 +38,8 @@ Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli, const SyncOption
   o.status_channel = cli.get("status-channel");
   o.receipt_channel = cli.get("receipt-channel");
   o.state_dir = cli.get("state-dir") == "none" ? "" : cli.get("state-dir");
-  auto period = cli.getDouble("status-period");
-  if (!period || !(*period > 0)) return Error{"--status-period must be a positive number of seconds"};
+  auto period = cli.getDouble("status-period", 1e-3, kMaxPeriodS);
+  if (!period) return Error{period.error() + " [s]"};
   o.status_period_s = *period;
   return o;
 }

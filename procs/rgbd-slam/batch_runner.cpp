@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <iostream>
 
 #include "common/source_factory.h"
@@ -43,8 +44,8 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   o.deterministic = cli.has("deterministic");
   o.quiet = cli.has("quiet");
   o.groundtruth_path = cli.has("groundtruth") ? cli.get("groundtruth") : "";
-  auto max_frames = cli.getInt("max-frames");
-  if (!max_frames || *max_frames < 0) return Error{"--max-frames must be >= 0"};
+  auto max_frames = cli.getInt("max-frames", 0, std::numeric_limits<long>::max());
+  if (!max_frames) return Error{max_frames.error()};
   o.max_frames = *max_frames;
   auto loss = cli.getDouble("link-loss");
   if (!loss || !(*loss >= 0.0 && *loss <= 1.0)) return Error{"--link-loss must be a fraction from 0 to 1"};
@@ -66,8 +67,11 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
     camera = *loaded;
     given = camera;
   } else {
+    auto spec = parseSourceSpec(options.source);
+    if (!spec) return Error{"--source: " + spec.error()};
+    if (spec->kind != "synth") return Error{"--camera is required for " + spec->kind + ": sources (see --help)"};
     auto synthetic = syntheticCamera(options.source);
-    if (!synthetic) return Error{"--camera is required for this source (" + synthetic.error() + ")"};
+    if (!synthetic) return Error{"--source " + options.source + ": " + synthetic.error()};
     camera = *synthetic;
   }
   auto source = openSource(options.source, given);

@@ -48,18 +48,19 @@ Expected<TrackerNodeOptions> nodeOptions(const CommandLine& cli, const SyncOptio
   for (auto [name, target, min] : {std::tuple{"status-period", &o.status_period_s, 1e-3},
                                    std::tuple{"exit-after-idle", &o.exit_after_idle_s, 0.0},
                                    std::tuple{"ack-wait", &o.ack_wait_s, 0.0}}) {
-    auto value = cli.getDouble(name);
-    if (!value || *value < min) return Error{std::string("--") + name + " must be a number of seconds >= " + std::to_string(min)};
+    auto value = cli.getDouble(name, min, kMaxPeriodS);
+    if (!value) return Error{value.error() + " [s]"};
     *target = *value;
   }
-  auto backlog = cli.getInt("max-backlog");
-  if (!backlog || *backlog < 1) return Error{"--max-backlog must be >= 1"};
+  // Frames waiting at most: each is a decoded 640x480 frame (1.5 MB); 1000 is 1.5 GB.
+  auto backlog = cli.getInt("max-backlog", 1, 1000);
+  if (!backlog) return Error{backlog.error()};
   o.max_backlog_frames = static_cast<int>(*backlog);
   const std::string grey = cli.get("keyframe-grey"), depth = cli.get("keyframe-depth");
   if (grey != "jpeg" && grey != "png") return Error{"--keyframe-grey must be jpeg or png"};
   if (depth != "full" && depth != "half" && depth != "quarter") return Error{"--keyframe-depth must be full, half or quarter"};
-  auto quality = cli.getInt("keyframe-jpeg-quality");
-  if (!quality || *quality < 1 || *quality > 100) return Error{"--keyframe-jpeg-quality must be 1-100"};
+  auto quality = cli.getInt("keyframe-jpeg-quality", 1, 100);
+  if (!quality) return Error{quality.error()};
   o.encoding = KeyframeEncoding{grey == "jpeg", static_cast<int>(*quality), depth == "full" ? 1 : depth == "half" ? 2 : 4};
   return o;
 }
@@ -70,8 +71,8 @@ Expected<int64_t> mapId(const CommandLine& cli) {
     std::uniform_int_distribution<int64_t> id(1, (int64_t{1} << 62));
     return id(random);
   }
-  auto id = cli.getInt("map-id");
-  if (!id || *id <= 0) return Error{"--map-id must be a positive integer"};
+  auto id = cli.getInt("map-id", 1, int64_t{1} << 62);
+  if (!id) return Error{id.error()};
   return static_cast<int64_t>(*id);
 }
 

@@ -122,7 +122,7 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   const int64_t now_us = utimeNow();  // the pose's publication (within microseconds)
   result.pose.latency_ms = (now_us - frame->utime) * 1e-3;
-  const rgbdslam::pose_t pose = toLcm(result.pose);
+  const rgbdslam::pose_t pose = toLcm(result.pose, map_id_);
   local_->publish(options_.pose_channel, &pose);
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);

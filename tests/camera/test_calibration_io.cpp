@@ -87,3 +87,34 @@ TEST(CalibrationIo, BadDistortionListIsAnError) {
 
 }  // namespace
 }  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// Issue 13: a camera file whose top level is a list aborted every process (an uncaught
+// cv::Exception); image_width 1e12 said "must be positive".
+TEST(CalibrationIo, TopLevelListOrValueIsAnErrorNamingTheFile) {
+  test::TempDir dir;
+  for (const char* body : {"%YAML:1.0\n- fx: 500\n- fy: 500\n", "- 1\n- 2\n", "%YAML:1.0\n--- 42\n"}) {
+    const std::string path = writeFile(dir, "list.yaml", body);
+    auto camera = loadCamera(path);
+    ASSERT_FALSE(camera) << body;
+    EXPECT_NE(camera.error().find(path), std::string::npos) << camera.error();
+  }
+}
+
+TEST(CalibrationIo, ImageSizeBeyondAnIntSaysWhatIsWrong) {
+  test::TempDir dir;
+  const std::string base = "%YAML:1.0\nfx: 500\nfy: 500\ncx: 320\ncy: 240\ndepth_factor: 5000\nimage_height: 480\n";
+  for (const char* width : {"1e12", "640.5", "-640", "0", "8193"}) {
+    const std::string path = writeFile(dir, "wide.yaml", base + "image_width: " + width + "\n");
+    auto camera = loadCamera(path);
+    ASSERT_FALSE(camera) << width;
+    EXPECT_NE(camera.error().find("'image_width'"), std::string::npos) << camera.error();
+    EXPECT_NE(camera.error().find("whole number in [1, 8192]"), std::string::npos) << camera.error();
+    EXPECT_EQ(camera.error().find("must be positive"), std::string::npos) << camera.error();
+  }
+}
+
+}  // namespace
+}  // namespace rgbdslam

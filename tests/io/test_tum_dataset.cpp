@@ -149,3 +149,41 @@ TEST(TumDataset, ReadsTheSharedTeddySequenceExactly) {
 
 }  // namespace
 }  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// Issue 13: a symlink loop in a TUM directory threw std::filesystem::filesystem_error.
+TEST(TumDataset, SymlinkLoopIsAnErrorNamingTheLine) {
+  test::TempDir dir;
+  writeSequence(dir.path(), 3);
+  fs::create_symlink("loop_b.png", dir.path() + "/rgb/loop_a.png");
+  fs::create_symlink("loop_a.png", dir.path() + "/rgb/loop_b.png");
+  std::ofstream(dir.path() + "/rgb.txt", std::ios::app) << "200.000000 rgb/loop_a.png\n";
+  auto source = openTumDataset(dir.path(), smallCamera());
+  ASSERT_FALSE(source);
+  EXPECT_NE(source.error().find("rgb.txt:7"), std::string::npos) << source.error();
+  EXPECT_NE(source.error().find("rgb/loop_a.png"), std::string::npos) << source.error();
+  test::TempDir looped;
+  fs::create_symlink(looped.path() + "/self", looped.path() + "/self");
+  EXPECT_FALSE(openTumDataset(looped.path() + "/self", smallCamera()));
+}
+
+// Issue 13: timestamps of 1e13 s overflowed into negative frame times.
+TEST(TumDataset, TimestampsBeyondTheBoundAreRejected) {
+  for (const char* stamp : {"1e13", "-5", "9.3e12"}) {
+    test::TempDir dir;
+    writeSequence(dir.path(), 3);
+    std::ifstream listed(dir.path() + "/depth.txt");
+    std::string first_time, existing;  // a file that exists: only the stamp is wrong
+    listed >> first_time >> existing;
+    std::ofstream(dir.path() + "/depth.txt", std::ios::app) << stamp << " " << existing << "\n";
+    auto source = openTumDataset(dir.path(), smallCamera());
+    ASSERT_FALSE(source) << stamp;
+    EXPECT_NE(source.error().find("depth.txt:4"), std::string::npos) << source.error();
+    EXPECT_NE(source.error().find("outside [0,"), std::string::npos) << source.error();
+  }
+}
+
+}  // namespace
+}  // namespace rgbdslam

@@ -67,3 +67,37 @@ TEST(CommandLine, HelpListsEveryOptionWithDefault) {
 
 }  // namespace
 }  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// Issue 13: --max-backlog 4294967296 wrapped to 0 in an int; NaN or inf periods flooded or
+// silenced messages.
+TEST(CommandLine, RangesNonFiniteAndOverflowingNumbersAreErrors) {
+  CommandLine cli = makeCli();
+  cli.option("backlog", "N", "frames", "2");
+  ASSERT_TRUE(parse(cli, {"x", "--backlog", "4294967296", "--rate", "nan"}));
+  auto backlog = cli.getInt("backlog", 1, 1000);
+  ASSERT_FALSE(backlog);
+  EXPECT_EQ(backlog.error(), "--backlog: 4294967296 is outside [1, 1000]");
+  auto rate = cli.getDouble("rate");
+  ASSERT_FALSE(rate);
+  EXPECT_NE(rate.error().find("not a finite number"), std::string::npos) << rate.error();
+  for (const char* text : {"inf", "-inf", "1e999", "infinity"}) {
+    CommandLine c = makeCli();
+    ASSERT_TRUE(parse(c, {"x", "--rate", text}));
+    EXPECT_FALSE(c.getDouble("rate")) << text;
+  }
+  CommandLine big = makeCli();
+  ASSERT_TRUE(parse(big, {"x", "--rate", "99999999999999999999999"}));
+  auto huge = big.getInt("rate");
+  ASSERT_FALSE(huge);
+  EXPECT_NE(huge.error().find("too large"), std::string::npos) << huge.error();
+  CommandLine in_range = makeCli();
+  ASSERT_TRUE(parse(in_range, {"x", "--rate", "0.5"}));
+  EXPECT_FALSE(in_range.getDouble("rate", 1.0, kMaxPeriodS));
+  EXPECT_DOUBLE_EQ(*in_range.getDouble("rate", 0.1, kMaxPeriodS), 0.5);
+}
+
+}  // namespace
+}  // namespace rgbdslam

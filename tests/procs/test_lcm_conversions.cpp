@@ -4,34 +4,14 @@
 
 #include <cstring>
 
+#include "sample_messages.h"
+
 namespace rgbdslam {
 namespace {
 
-RgbdFrame makeFrame() {
-  RgbdFrame frame;
-  frame.utime = 1700000000123456;
-  frame.seq = 42;
-  frame.colour = cv::Mat(48, 64, CV_8UC3);
-  cv::randu(frame.colour, 0, 255);
-  frame.depth = cv::Mat(48, 64, CV_16UC1);
-  cv::randu(frame.depth, 0, 20000);
-  frame.depth_scale = 5000.0;
-  frame.camera_name = "tum_fr3";
-  return frame;
-}
+using test::encode;
 
-template <typename T>
-std::vector<uint8_t> encode(const T& msg) {
-  std::vector<uint8_t> bytes(msg.getEncodedSize());
-  EXPECT_EQ(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())), static_cast<int>(bytes.size()));
-  return bytes;
-}
-
-SE3 somePose() {
-  Vec6 xi;
-  xi << 0.5, -1.0, 2.0, 0.1, -0.3, 0.2;
-  return SE3::exp(xi);
-}
+RgbdFrame makeFrame() { return test::sampleFrame(); }
 
 TEST(LcmConversions, FrameRoundTripIsExactForRawAndZlib) {
   const RgbdFrame frame = makeFrame();
@@ -105,45 +85,30 @@ TEST(LcmConversions, NegativeArraySizeIsRejectedWithoutThrowing) {
 }
 
 TEST(LcmConversions, PoseRoundTrip) {
-  PoseEstimate pose;
-  pose.utime = 123;
-  pose.seq = 7;
-  pose.T_w_c = somePose();
+  PoseEstimate pose = test::samplePose();
   pose.state = TrackingState::kDodgy;
-  pose.points_tracked = 150;
-  pose.quality = 0.5;
-  pose.latency_ms = 3.25;
-  auto back = fromLcm(toLcm(pose));
+  auto back = fromLcm(toLcm(pose, 1));
   ASSERT_TRUE(back) << back.error();
-  EXPECT_EQ(back->state, TrackingState::kDodgy);
-  EXPECT_EQ(back->points_tracked, 150);
-  EXPECT_FLOAT_EQ(back->latency_ms, 3.25);
-  EXPECT_LT((back->T_w_c.inverse() * pose.T_w_c).log().norm(), 1e-12);
+  EXPECT_EQ(back->pose.state, TrackingState::kDodgy);
+  EXPECT_EQ(back->pose.points_tracked, 150);
+  EXPECT_FLOAT_EQ(back->pose.latency_ms, 3.25);
+  EXPECT_LT((back->pose.T_w_c.inverse() * pose.T_w_c).log().norm(), 1e-12);
 }
 
 TEST(LcmConversions, PoseWithBadQuaternionOrStateIsRejected) {
-  rgbdslam::pose_t msg = toLcm(PoseEstimate{});
+  rgbdslam::pose_t msg = toLcm(PoseEstimate{}, 1);
   msg.orientation[0] = 2.0;
   EXPECT_FALSE(fromLcm(msg));
-  msg = toLcm(PoseEstimate{});
+  msg = toLcm(PoseEstimate{}, 1);
   msg.position[1] = std::nan("");
   EXPECT_FALSE(fromLcm(msg));
-  msg = toLcm(PoseEstimate{});
+  msg = toLcm(PoseEstimate{}, 1);
   msg.state = 9;
   EXPECT_FALSE(fromLcm(msg));
 }
 
 TEST(LcmConversions, KeyframeRoundTrip) {
-  KeyframeData keyframe;
-  keyframe.utime = 99;
-  keyframe.map_id = 1234;
-  keyframe.id = 3;
-  keyframe.T_w_c = somePose();
-  keyframe.grey = cv::Mat(48, 64, CV_8UC1);
-  cv::randu(keyframe.grey, 0, 255);
-  keyframe.depth = makeFrame().depth;
-  keyframe.measurements.push_back({17, Eigen::Vector2d(10.25, 20.5), 1, 1.5});
-  keyframe.new_points.push_back({3 * kPointsPerKeyframe + 1, Vec3(1, 2, 3), 3, Eigen::Vector2d(5, 6), 2});
+  const KeyframeData keyframe = test::sampleKeyframe();
   const auto bytes = encode(toLcm(keyframe));
   auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());
   ASSERT_TRUE(msg) << msg.error();
@@ -163,15 +128,7 @@ TEST(LcmConversions, KeyframeRoundTrip) {
 }
 
 TEST(LcmConversions, MapRoundTrip) {
-  MapUpdate update;
-  update.map_id = 1234;
-  update.version = 8;
-  update.is_snapshot = true;
-  update.acked_keyframes = {0, 1, 2};
-  update.keyframes.push_back({2, somePose()});
-  update.points.push_back({5, Vec3(0.5, 0.25, 3), 1, Eigen::Vector2d(100, 200), 0});
-  update.moved_points.push_back({6, Vec3(100.0, -2.5, 1.25)});
-  update.removed_points = {9, 10};
+  const MapUpdate update = test::sampleMapUpdate();
   auto back = fromLcm(toLcm(update));
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->version, 8);
@@ -183,7 +140,7 @@ TEST(LcmConversions, MapRoundTrip) {
   ASSERT_EQ(back->moved_points.size(), 1u);
   EXPECT_EQ(back->moved_points[0].id, 6);
   EXPECT_LT((back->moved_points[0].p_w - Vec3(100.0, -2.5, 1.25)).norm(), 1e-5);  // float
-  EXPECT_LT((back->keyframes[0].T_w_c.inverse() * somePose()).log().norm(), 1e-12);
+  EXPECT_LT((back->keyframes[0].T_w_c.inverse() * update.keyframes[0].T_w_c).log().norm(), 1e-12);
 }
 
 TEST(LcmConversions, CompactKeyframeEncodingKeepsHalfTheDepthPixels) {

@@ -97,3 +97,21 @@ TEST(MapJournal, AnUnwritableFolderIsAnError) {
 
 }  // namespace
 }  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// Issue 13: a map.journal that is a directory crashed the mapper (an uncaught exception
+// from reading it as a stream).
+TEST(MapJournal, AJournalThatIsADirectoryIsAnError) {
+  test::TempDir dir;
+  ASSERT_EQ(::mkdir(dir.file("map.journal").c_str(), 0755), 0);
+  MapJournal::Contents contents;
+  auto journal = MapJournal::open(dir.path(), &contents);
+  ASSERT_FALSE(journal);
+  EXPECT_NE(journal.error().find(dir.file("map.journal")), std::string::npos) << journal.error();
+  EXPECT_NE(journal.error().find("not a regular file"), std::string::npos) << journal.error();
+}
+
+}  // namespace
+}  // namespace rgbdslam

@@ -1,11 +1,17 @@
 // send-messages (test tool): publishes test traffic on one channel.
-//   --poses N [--rate HZ]          N valid pose_t messages (seq 0..N-1, a moving pose)
+//   --poses N [--rate HZ] [--map-id ID]  N valid pose_t messages (seq 0..N-1, a moving pose)
 //   --bad truncated|oversized|wrongtype|garbage [--type pose|frame|keyframe|map]
 //         one malformed message of that kind, made from a valid message of --type
 //   --bad keyframe-foreign-map   a valid keyframe (id 3) of map 424242
 //   --bad map-stale --map-id ID  a valid map snapshot of map ID with version 1 (the past)
 //   --bad map-foreign-map        a valid map snapshot of map 424242, version 10^9
 //   --bad frame-wrong-size       a valid 320x240 frame (the cameras are 640x480)
+//   Hostile input (issue 13), each a small message that crashed or stalled a process before:
+//   --bad map-huge-acked         a ~110-byte map claiming 2^28 acknowledged ids
+//   --bad keyframe-huge-counts   a small keyframe claiming 10^8 measurements
+//   --bad status-huge-counts     a 54-byte status claiming 10^8 counters
+//   --bad keyframe-level-4       keyframe 0 of map --map-id whose points claim pyramid level 4
+//   --bad keyframe-far           keyframe 0 of map --map-id at x = 1e155 m
 // Used by the integration tests to drive pose-logger and the SLAM processes.
 #include <chrono>
 #include <cmath>
@@ -20,7 +26,7 @@ using namespace rgbdslam;
 
 namespace {
 
-std::vector<uint8_t> encodePose(int64_t seq) {
+std::vector<uint8_t> encodePose(int64_t seq, int64_t map_id) {
   PoseEstimate pose;
   pose.utime = 1700000000000000 + seq * 33333;
   pose.seq = seq;
@@ -31,7 +37,7 @@ std::vector<uint8_t> encodePose(int64_t seq) {
   pose.points_tracked = 100;
   pose.quality = 0.9;
   pose.latency_ms = 2.5;
-  const rgbdslam::pose_t msg = toLcm(pose);
+  const rgbdslam::pose_t msg = toLcm(pose, map_id);
   std::vector<uint8_t> bytes(msg.getEncodedSize());
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
@@ -69,11 +75,56 @@ std::vector<uint8_t> mapBytes(int64_t map_id, int64_t version) {
   return encode(toLcm(update));
 }
 
+void putBigEndian32(std::vector<uint8_t>& bytes, size_t offset, uint32_t value) {
+  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<uint8_t>(value >> (24 - 8 * i));
+}
+
+// Keyframe 0 of 'map_id', 64x48, with one measurement and one new point, then 'spoil'.
+std::vector<uint8_t> spoiledKeyframe(int64_t map_id, void (*spoil)(rgbdslam::keyframe_t&)) {
+  KeyframeData keyframe;
+  keyframe.map_id = map_id;
+  keyframe.id = 0;
+  keyframe.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(100));
+  keyframe.measurements.push_back({5, Eigen::Vector2d(10, 10), 0, 1.5});
+  keyframe.new_points.push_back({1, Vec3(0, 0, 2), 0, Eigen::Vector2d(20, 20), 0});
+  rgbdslam::keyframe_t msg = toLcm(keyframe);
+  spoil(msg);
+  return encode(msg);
+}
+
+// Small messages whose counts or fields crashed or stalled a process before issue 13.
+std::vector<uint8_t> hostileMessage(const std::string& kind, int64_t map_id) {
+  if (kind == "map-huge-acked") {
+    MapUpdate update;
+    update.map_id = map_id, update.version = 2, update.acked_keyframes = {0, 1, 2, 3, 4, 5, 6, 7};
+    auto bytes = encode(toLcm(update));
+    putBigEndian32(bytes, 8 + 8 + 8 + 8 + 1, 1u << 28);  // num_acked
+    return bytes;
+  }
+  if (kind == "keyframe-huge-counts") {
+    auto bytes = spoiledKeyframe(map_id, [](rgbdslam::keyframe_t& m) { m.measurements.clear(), m.new_points.clear(), m.num_measurements = m.num_new_points = 0; });
+    putBigEndian32(bytes, bytes.size() - 8, 100000000);  // num_measurements
+    return bytes;
+  }
+  if (kind == "status-huge-counts") {
+    rgbdslam::status_t status;
+    status.component = "c", status.state = "s", status.num_counters = status.num_timings = 0;
+    auto bytes = encode(status);
+    putBigEndian32(bytes, 8 + 8 + 4 + 2 + 4 + 2, 100000000);  // num_counters
+    return bytes;
+  }
+  if (kind == "keyframe-level-4") {
+    return spoiledKeyframe(map_id, [](rgbdslam::keyframe_t& m) { m.measurements[0].level = 4, m.new_points[0].level = 4; });
+  }
+  if (kind == "keyframe-far") return spoiledKeyframe(map_id, [](rgbdslam::keyframe_t& m) { m.position[0] = 1e155; });
+  return {};
+}
+
 std::vector<uint8_t> validMessage(const std::string& type) {
   if (type == "frame") return encode(toLcm(smallFrame(640, 480), FrameEncoding{}));
   if (type == "keyframe") return keyframeBytes(1);
   if (type == "map") return mapBytes(1, 5);
-  return encodePose(0);
+  return encodePose(0, 1);
 }
 
 std::vector<uint8_t> badMessage(const std::string& kind, const std::string& type, int64_t map_id) {
@@ -81,6 +132,7 @@ std::vector<uint8_t> badMessage(const std::string& kind, const std::string& type
   if (kind == "map-stale") return mapBytes(map_id, 1);
   if (kind == "map-foreign-map") return mapBytes(424242, 1000000000);
   if (kind == "frame-wrong-size") return encode(toLcm(smallFrame(320, 240), FrameEncoding{}));
+  if (auto hostile = hostileMessage(kind, map_id); !hostile.empty()) return hostile;
   std::vector<uint8_t> bytes = validMessage(type);
   if (kind == "truncated") bytes.resize(bytes.size() / 2);
   else if (kind == "oversized") bytes.resize(bytes.size() + 1000, 0x5A);
@@ -103,9 +155,9 @@ int main(int argc, char** argv) {
   cli.option("channel", "NAME", "channel", "SLAM_POSE");
   cli.option("poses", "N", "valid pose_t messages to send", "0");
   cli.option("rate", "HZ", "messages per second", "200");
-  cli.option("bad", "KIND", "one bad message: truncated|oversized|wrongtype|garbage|keyframe-foreign-map|map-stale|map-foreign-map|frame-wrong-size");
+  cli.option("bad", "KIND", "one bad message: truncated|oversized|wrongtype|garbage|keyframe-foreign-map|map-stale|map-foreign-map|frame-wrong-size|map-huge-acked|keyframe-huge-counts|status-huge-counts|keyframe-level-4|keyframe-far");
   cli.option("type", "T", "message type the malformed kinds start from: pose|frame|keyframe|map", "pose");
-  cli.option("map-id", "ID", "map id for --bad map-stale", "1");
+  cli.option("map-id", "ID", "map id of the poses and of --bad map-stale", "1");
   addLcmUrlOption(cli);
   if (Status s = cli.parse(argc, argv); !s) return usageError("send-messages", s.error());
   if (cli.helpRequested()) return std::cout << cli.helpText(), 0;
@@ -119,7 +171,7 @@ int main(int argc, char** argv) {
   const long n = *cli.getInt("poses");
   const auto period = std::chrono::microseconds(static_cast<int64_t>(1e6 / *cli.getDouble("rate")));
   for (long i = 0; i < n; ++i) {
-    const auto bytes = encodePose(i);
+    const auto bytes = encodePose(i, *cli.getInt("map-id"));
     (*lcm)->publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
     std::this_thread::sleep_for(period);
   }

@@ -109,3 +109,73 @@ TEST(OptionRegistry, ShippedSlamConfigMatchesTheDefaults) {
 
 }  // namespace
 }  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// Issue 13: a configuration whose top level is a list aborted every process (an uncaught
+// cv::Exception); contradictory ranges were accepted.
+TEST(OptionRegistry, TopLevelListOrValueIsAnErrorNamingTheFile) {
+  test::TempDir dir;
+  for (const char* body : {"- sample\n- other\n", "- rate: 3\n", "just text\n"}) {
+    Sample s;
+    OptionRegistry r;
+    s.bind(&r);
+    const Status loaded = r.load(writeYaml(dir, body));
+    ASSERT_FALSE(loaded) << body;
+    EXPECT_NE(loaded.error().find(dir.file("c.yaml")), std::string::npos) << loaded.error();
+  }
+  SlamOptions slam;
+  OptionRegistry r;
+  slam.bind(&r);
+  const Status loaded = r.load(writeYaml(dir, "- tracker\n- mapper\n"));
+  ASSERT_FALSE(loaded);
+  EXPECT_NE(loaded.error().find("top level must be a mapping"), std::string::npos) << loaded.error();
+}
+
+// Found by fuzz_config (minimised): OpenCV's YAML parser threw std::length_error, which
+// nothing caught (std::terminate).
+TEST(OptionRegistry, ParserExceptionsOtherThanOpenCvsAreErrors) {
+  test::TempDir dir;
+  const std::string path = dir.file("c.yaml");
+  std::ofstream(path) << "%YAML:1.\n n:0\n :";
+  SlamOptions slam;
+  OptionRegistry r;
+  slam.bind(&r);
+  const Status loaded = r.load(path);
+  ASSERT_FALSE(loaded);
+  EXPECT_NE(loaded.error().find(path), std::string::npos) << loaded.error();
+}
+
+TEST(OptionRegistry, ContradictoryRangesAreRejectedTogether) {
+  SlamOptions slam;
+  OptionRegistry r;
+  slam.bind(&r);
+  EXPECT_TRUE(r.validate()) << r.validate().error();
+  const char* contradictions[] = {
+      "mapper.keyframe_min_depth_m=9", "mapper.epipolar_min_depth_m=20", "tracker.keyframe_min_depth_m=9",
+      "tracker.keyframe_max_depth_m=0.2", "tracker.quality_lost=0.9", "tracker.min_points_tracked=5000",
+      "tracker.depth_points_per_level=0", "tracker.max_robust_sigma=0.1", "sync.resend_period_s=10"};
+  for (const char* assignment : contradictions) {
+    SlamOptions o;
+    OptionRegistry registry;
+    o.bind(&registry);
+    ASSERT_TRUE(registry.set(assignment)) << assignment;  // each value alone is in range
+    const Status valid = registry.validate();
+    ASSERT_FALSE(valid) << assignment;
+    const std::string key = std::string(assignment).substr(0, std::string(assignment).find('='));
+    EXPECT_NE(valid.error().find(key), std::string::npos) << valid.error();
+  }
+  SlamOptions o;
+  OptionRegistry registry;
+  o.bind(&registry);
+  ASSERT_TRUE(registry.set("mapper.keyframe_min_depth_m=9"));
+  const Status valid = registry.validate();
+  EXPECT_NE(valid.error().find("mapper.keyframe_min_depth_m = 9, mapper.keyframe_max_depth_m = 8"), std::string::npos)
+      << valid.error();
+  ASSERT_TRUE(registry.set("mapper.keyframe_max_depth_m=10"));
+  EXPECT_TRUE(registry.validate());
+}
+
+}  // namespace
+}  // namespace rgbdslam

@@ -1,14 +1,19 @@
 #include "rgbdslam/camera/calibration_io.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <optional>
+
+#include "rgbdslam/util/yaml_file.h"
 
 namespace rgbdslam {
 namespace {
 
 struct KeyReader {
-  const cv::FileStorage& fs;
+  const cv::FileNode& fs;  // the file's top level (a mapping)
   const std::string& path;
   std::string error;
 
@@ -30,6 +35,25 @@ struct KeyReader {
     }
     if (required) fail(std::string("missing key '") + *keys.begin() + "'");
     return fallback;
+  }
+
+  // Reads a required whole number within [min, max] from the first of 'keys' present.
+  int integer(std::initializer_list<const char*> keys, int min, int max) {
+    const double value = number(keys, true, 0.0);
+    if (!error.empty()) return 0;
+    if (value != std::floor(value) || value < min || value > max) {
+      const std::string key = *std::find_if(keys.begin(), keys.end(), [&](const char* k) { return has(k); });
+      fail("key '" + key + "' is " + text(value) + ", must be a whole number in [" +
+           std::to_string(min) + ", " + std::to_string(max) + "]");
+      return 0;
+    }
+    return static_cast<int>(value);
+  }
+
+  static std::string text(double value) {
+    char out[32];
+    std::snprintf(out, sizeof out, "%g", value);
+    return out;
   }
 
   void fail(const std::string& what) {
@@ -65,16 +89,7 @@ void readDistortion(KeyReader& reader, PinholeCamera& camera) {
   camera.k3 = reader.number({"Camera.k3"}, false);
 }
 
-}  // namespace
-
-Expected<PinholeCamera> loadCamera(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) return Error{path + ": camera file not found"};
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(path, cv::FileStorage::READ)) return Error{path + ": cannot be read as YAML"};
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a valid OpenCV YAML file (" + e.msg + ")"};
-  }
+Expected<PinholeCamera> readCamera(const cv::FileNode& fs, const std::string& path) {
   KeyReader reader{fs, path, {}};
   PinholeCamera camera;
   if (reader.has("name") && fs["name"].isString()) {
@@ -86,17 +101,31 @@ Expected<PinholeCamera> loadCamera(const std::string& path) {
   camera.fy = reader.number({"fy", "Camera.fy"});
   camera.cx = reader.number({"cx", "Camera.cx"});
   camera.cy = reader.number({"cy", "Camera.cy"});
-  camera.width = static_cast<int>(reader.number({"image_width", "Camera.width"}));
-  camera.height = static_cast<int>(reader.number({"image_height", "Camera.height"}));
+  camera.width = reader.integer({"image_width", "Camera.width"}, 1, kMaxCameraImageSide);
+  camera.height = reader.integer({"image_height", "Camera.height"}, 1, kMaxCameraImageSide);
   camera.depth_factor = reader.number({"depth_factor", "DepthMapFactor"});
   readDistortion(reader, camera);
   if (!reader.error.empty()) return Error{reader.error};
-  if (camera.fx <= 0 || camera.fy <= 0) return Error{path + ": fx and fy must be positive"};
-  if (camera.width <= 0 || camera.height <= 0) {
-    return Error{path + ": image size must be positive"};
+  if (camera.fx <= 0 || camera.fy <= 0) {
+    return Error{path + ": fx and fy must be positive, got " + KeyReader::text(camera.fx) + " and " + KeyReader::text(camera.fy)};
   }
-  if (camera.depth_factor <= 0) return Error{path + ": depth factor must be positive"};
+  if (camera.depth_factor <= 0) {
+    return Error{path + ": depth factor must be positive, got " + KeyReader::text(camera.depth_factor)};
+  }
   return camera;
+}
+
+}  // namespace
+
+Expected<PinholeCamera> loadCamera(const std::string& path) {
+  std::optional<Expected<PinholeCamera>> camera;
+  const Status read = readYamlMapping(path, "camera", "keys such as fx: ..., image_width: ...",
+                                      [&](const cv::FileNode& root) {
+                                        camera = readCamera(root, path);
+                                        return *camera ? Status{} : Status(Error{camera->error()});
+                                      });
+  if (!read) return Error{read.error()};
+  return *camera;
 }
 
 }  // namespace rgbdslam

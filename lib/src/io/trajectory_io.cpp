@@ -10,10 +10,14 @@ namespace rgbdslam {
 std::string formatTumLine(const TimedPose& pose) {
   const Vec3& t = pose.T_w_c.translation();
   const Eigen::Quaterniond& q = pose.T_w_c.rotation();
-  char buffer[256];
-  std::snprintf(buffer, sizeof(buffer), "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", pose.t,
-                t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
-  return buffer;
+  // Sized by a first pass: a value of 1e200 prints 200 digits, and a line is never cut.
+  const auto print = [&](char* out, size_t size) {
+    return std::snprintf(out, size, "%.6f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", pose.t, t.x(),
+                         t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+  };
+  std::string line(static_cast<size_t>(print(nullptr, 0)), '\0');
+  print(line.data(), line.size() + 1);
+  return line;
 }
 
 Expected<TimedPose> parseTumLine(const std::string& line) {

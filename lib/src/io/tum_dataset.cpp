@@ -19,6 +19,16 @@ struct Stamped {
   std::string path;
 };
 
+// The non-throwing filesystem calls: a symlink loop (ELOOP) or a permission error is a
+// message, not an exception.
+Status checkRegularFile(const fs::path& path) {
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (error) return Error{"cannot be reached: " + error.message()};
+  if (!fs::is_regular_file(status)) return Error{fs::exists(status) ? "is not a regular file" : "does not exist"};
+  return Status{};
+}
+
 // Parses "timestamp relative/path" lines; every named file must exist.
 Expected<std::vector<Stamped>> readList(const std::string& dir, const std::string& name) {
   const std::string list_path = (fs::path(dir) / name).string();
@@ -36,10 +46,12 @@ Expected<std::vector<Stamped>> readList(const std::string& dir, const std::strin
     if (!(in >> entry.t >> entry.path) || !std::isfinite(entry.t)) {
       return Error{where + "expected 'timestamp path'"};
     }
-    if (in >> rest) return Error{where + "unexpected text '" + rest + "' after the path"};
-    if (!fs::is_regular_file(fs::path(dir) / entry.path)) {
-      return Error{where + "names " + entry.path + ", which does not exist"};
+    if (entry.t < 0 || entry.t > kMaxTumTimestampS) {
+      return Error{where + "timestamp " + std::to_string(entry.t) + " s is outside [0, " +
+                   std::to_string(kMaxTumTimestampS) + "] s"};
     }
+    if (in >> rest) return Error{where + "unexpected text '" + rest + "' after the path"};
+    if (Status s = checkRegularFile(fs::path(dir) / entry.path); !s) return Error{where + "names " + entry.path + ", which " + s.error()};
     if (!list.empty() && entry.t <= list.back().t) return Error{where + "timestamps must increase"};
     list.push_back(entry);
   }
@@ -97,7 +109,8 @@ std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + s
 }  // namespace
 
 Expected<std::vector<TumEntry>> readTumIndex(const std::string& dir, const TumOptions& options) {
-  if (!fs::is_directory(dir)) return Error{dir + ": no such directory"};
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) return Error{dir + ": no such directory" + (error ? " (" + error.message() + ")" : "")};
   auto rgb = readList(dir, "rgb.txt");
   if (!rgb) return Error{rgb.error()};
   auto depth = readList(dir, "depth.txt");

@@ -25,6 +25,9 @@ void SyncOptions::bind(OptionRegistry* r) {
           "mapper: a keyframe whose centre moved further than this since last published is sent again");
   r->bind(s, "keyframe_turn_rad", &p.diff.keyframe_turn_rad, 0.0, 1.0, "rad",
           "mapper: ...or whose orientation turned more than this");
+  r->require("sync.resend_max_period_s must not be below sync.resend_period_s", [this] {
+    return outbox.resend_max_period_s >= outbox.resend_period_s;
+  });
 }
 
 }  // namespace rgbdslam

@@ -3,6 +3,22 @@
 #include "rgbdslam/tracking/tracker.h"
 
 namespace rgbdslam {
+namespace {
+
+// Options that only make sense together; a contradiction leaves nothing to track.
+void bindRules(TrackerOptions* o, OptionRegistry* r) {
+  r->requireBelow("tracker", "keyframe_min_depth_m", "keyframe_max_depth_m");
+  r->require("tracker.quality_lost must not exceed tracker.quality_good",
+             [o] { return o->quality.lost <= o->quality.good; });
+  r->require("tracker.min_points_tracked must not exceed tracker.fine_max_points (no frame could be tracked)",
+             [o] { return o->quality.min_points_tracked <= o->fine.max_points; });
+  r->require("tracker.init_min_points must not exceed kMaxLevels (4) times tracker.depth_points_per_level (the map could never start)",
+             [o] { return o->init_min_points <= kMaxLevels * o->depth_points.max_points_per_level; });
+  r->require("tracker.max_robust_sigma must be 0 (no cap) or at least tracker.min_robust_sigma",
+             [o] { return o->pose.max_robust_sigma == 0 || o->pose.max_robust_sigma >= o->pose.min_robust_sigma; });
+}
+
+}  // namespace
 
 void MotionOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "velocity_damping", &velocity_damping, 0.0, 1.0, "",
@@ -70,6 +86,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_candidates", &relocalise_candidates, 1, 100, "keyframes",
           "most similar keyframes tried per frame when lost");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
+  bindRules(this, r);
 }
 
 }  // namespace rgbdslam

@@ -1,5 +1,9 @@
 #include "rgbdslam/util/option_registry.h"
 
+#include "rgbdslam/util/yaml_file.h"
+
+#include <cassert>
+#include <cctype>
 #include <cerrno>
 #include <algorithm>
 #include <cassert>
@@ -146,24 +150,26 @@ std::vector<std::string> OptionRegistry::sectionsInOrder() const {
   return sections;
 }
 
-OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const std::string& key) {
-  for (auto& e : entries_) {
+const OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const std::string& key) const {
+  for (const auto& e : entries_) {
     if (e.section == section && e.key == key) return &e;
   }
   return nullptr;
 }
 
+OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const std::string& key) {
+  return const_cast<Entry*>(static_cast<const OptionRegistry*>(this)->find(section, key));
+}
+
 Status OptionRegistry::load(const std::string& path) {
-  if (!std::filesystem::is_regular_file(path)) return Error{path + ": configuration file not found"};
-  cv::FileStorage fs;
-  try {
-    if (!fs.open(path, cv::FileStorage::READ)) return Error{path + ": cannot be read as YAML"};
-  } catch (const cv::Exception& e) {
-    return Error{path + ": not a valid OpenCV YAML file (" + e.msg + ")"};
-  }
+  return readYamlMapping(path, "configuration", "sections such as tracker: ...",
+                         [&](const cv::FileNode& root) { return loadSections(root, path); });
+}
+
+Status OptionRegistry::loadSections(const cv::FileNode& root, const std::string& path) {
   std::set<std::string> sections;
   for (const auto& e : entries_) sections.insert(e.section);
-  for (const cv::FileNode& section : fs.root()) {
+  for (const cv::FileNode& section : root) {
     const std::string section_name = section.name();
     if (!sections.count(section_name)) return Error{path + ": unknown section '" + section_name + "'"};
     if (!section.isMap()) return Error{path + ": section '" + section_name + "' must be a mapping"};
@@ -176,6 +182,44 @@ Status OptionRegistry::load(const std::string& path) {
     }
   }
   return {};
+}
+
+void OptionRegistry::require(const std::string& what, std::function<bool()> holds) {
+  rules_.push_back({what, std::move(holds)});
+}
+
+void OptionRegistry::requireBelow(const std::string& section, const std::string& low,
+                                  const std::string& high) {
+  const Entry* a = find(section, low);
+  const Entry* b = find(section, high);
+  assert(a && b && a->kind != "choice" && b->kind != "choice");
+  // Entries are found again at check time: entries_ may have grown (and moved) since.
+  require(section + "." + low + " must be below " + section + "." + high, [this, section, low, high] {
+    return *parseDouble(find(section, low)->show()) < *parseDouble(find(section, high)->show());
+  });
+  (void)a, (void)b;
+}
+
+Status OptionRegistry::validate() const {
+  for (const Rule& rule : rules_) {
+    if (!rule.holds()) return Error{"contradictory options: " + rule.what + " (" + valuesIn(rule.what) + ")"};
+  }
+  return {};
+}
+
+// "a.b = 1, c.d = 2" for every bound option named in 'text'.
+std::string OptionRegistry::valuesIn(const std::string& text) const {
+  std::string out;
+  for (const auto& e : entries_) {
+    const std::string name = e.section + "." + e.key;
+    for (size_t at = text.find(name); at != std::string::npos; at = text.find(name, at + 1)) {
+      const size_t end = at + name.size();
+      if (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '_')) continue;
+      out += (out.empty() ? "" : ", ") + name + " = " + e.show();
+      break;
+    }
+  }
+  return out;
 }
 
 Status OptionRegistry::set(const std::string& assignment) {

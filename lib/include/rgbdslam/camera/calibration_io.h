@@ -5,13 +5,18 @@
 //    distortion (k1 k2 p1 p2 k3, optional, default zeros), depth_factor;
 //  - ORB-SLAM style: Camera.fx, Camera.fy, Camera.cx, Camera.cy, Camera.k1 ... Camera.k3
 //    (optional), Camera.width, Camera.height, DepthMapFactor.
-// A missing or ill-typed required key is an error naming the key and the file.
+// A missing or ill-typed required key, a value out of range, or a file whose top level is
+// not a mapping is an error naming the key and the file.
 #include <string>
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/util/expected.h"
 
 namespace rgbdslam {
+
+// Largest image side a camera file may state: 8x a 1024 px camera; larger is a typo or a
+// corrupt file (and 1e12 does not fit an int).
+constexpr int kMaxCameraImageSide = 8192;  // [px]
 
 Expected<PinholeCamera> loadCamera(const std::string& path);
 

@@ -4,7 +4,8 @@
 // PNG, depth 16-bit PNG in units of 1/depth_factor m (0 = no reading). Colour and depth are
 // not synchronised: they are paired one-to-one by nearest timestamp within max_dt.
 // Call order: openTumDataset() checks the lists and that every named file exists (fail
-// fast, naming file and line); then next() decodes frame by frame. A frame that cannot be
+// fast, naming file and line: a missing or unreachable file, a symlink loop, a timestamp
+// outside [0, kMaxTumTimestampS]); then next() decodes frame by frame. A frame that cannot be
 // decoded (truncated PNG, 8-bit depth, wrong size) is reported as kBadFrame naming the file,
 // and reading goes on with the next frame.
 #include <memory>
@@ -16,6 +17,10 @@
 #include "rgbdslam/util/expected.h"
 
 namespace rgbdslam {
+
+// Largest timestamp a list may hold: 1e10 s is the year 2286; in microseconds it stays far
+// inside int64 (9.2e12 s), so frame stamps cannot overflow into negative times.
+constexpr double kMaxTumTimestampS = 1e10;  // [s]
 
 struct TumOptions {
   double max_dt_s = 0.02;  // largest |t_rgb - t_depth| for a pair [s]

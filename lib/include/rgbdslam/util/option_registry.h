@@ -2,8 +2,11 @@
 // One loader for every component's options. Each options struct (defaults in-class) binds
 // its fields here with a unit and a meaning; load() reads a YAML file (OpenCV FileStorage)
 // with one mapping per section and rejects unknown sections, unknown keys and ill-typed or
-// out-of-range values, naming the key and the file; describe() prints the effective
-// configuration. Call order: bind all fields, load() (optional), describe().
+// out-of-range values, naming the key and the file (also a file whose top level is not a
+// mapping); describe() prints the effective configuration. Options that depend on each other
+// (a minimum and its maximum) are checked together by validate(), once every value is set.
+// Call order: bind all fields and rules, load() (optional), set() (optional), validate(),
+// describe().
 // One option may feed several components: binding a section.key that is already bound (same
 // kind, same default) adds the field as another target, so that e.g. noise.sigma_2d_k sets
 // the tracker's and the bundle adjuster's copy of the noise model alike. Output lists each
@@ -14,6 +17,10 @@
 #include <vector>
 
 #include "rgbdslam/util/expected.h"
+
+namespace cv {
+class FileNode;
+}
 
 namespace rgbdslam {
 
@@ -49,6 +56,14 @@ class OptionRegistry {
                help);
   }
 
+  // A rule between options, checked by validate(): 'holds' is true when the values agree;
+  // 'what' states the rule in words, naming the keys ("tracker.a must be below tracker.b").
+  void require(const std::string& what, std::function<bool()> holds);
+  // The rule "section.low < section.high" for two numeric options bound before.
+  void requireBelow(const std::string& section, const std::string& low, const std::string& high);
+  // Every rule; the first broken one is an error that shows the values involved.
+  Status validate() const;
+
   Status load(const std::string& path);
   // Sets one option from "section.key=value" (command-line overrides).
   Status set(const std::string& assignment);
@@ -65,6 +80,10 @@ class OptionRegistry {
     std::function<Status(const std::string&)> parse;  // from text
     std::function<std::string()> show;
   };
+  struct Rule {
+    std::string what;
+    std::function<bool()> holds;
+  };
   Entry* find(const std::string& section, const std::string& key);
   // Adds the entry, or chains its parse onto an existing one of the same name (see above).
   void add(Entry entry);
@@ -73,7 +92,11 @@ class OptionRegistry {
                   std::function<void(int)> set_index, std::function<std::string()> show,
                   const std::string& help);
   std::vector<std::string> sectionsInOrder() const;
+  const Entry* find(const std::string& section, const std::string& key) const;
+  Status loadSections(const cv::FileNode& root, const std::string& path);
+  std::string valuesIn(const std::string& text) const;
   std::vector<Entry> entries_;
+  std::vector<Rule> rules_;
 };
 
 }  // namespace rgbdslam
