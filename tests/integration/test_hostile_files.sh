@@ -37,11 +37,11 @@ expect 2 "key 'image_width' is 1e+12, must be a whole number" rgbd-tracker --cam
 # Options: overflowing, non-finite, contradictory.
 expect 2 "max-backlog: 4294967296 is outside" rgbd-tracker --camera "$CAMERA" --max-backlog 4294967296
 expect 2 "status-period: 'nan' is not a finite number" rgbd-tracker --camera "$CAMERA" --status-period nan
-expect 2 "resend-period: 'inf' is not a finite number" rgbd-tracker --camera "$CAMERA" --resend-period inf
-expect 2 "resend-max-period (0.5 s) must not be below" rgbd-tracker --camera "$CAMERA" --resend-period 2 --resend-max-period 0.5
-expect 2 "map-period: 'inf' is not a finite number" rgbd-mapper --camera "$CAMERA" --map-period inf --state-dir none
-expect 2 "mapper.min_depth_m must be below mapper.max_depth_m" rgbd-mapper --camera "$CAMERA" --set mapper.min_depth_m=9 --state-dir none
-expect 2 "tracker.keyframe_min_depth_m must be below" rgbd-slam --source synth:room,frames=3 --set tracker.keyframe_max_depth_m=0 --output "$WORK/t.txt"
+expect 2 "sync.resend_period_s: 'inf' is not a number" rgbd-tracker --camera "$CAMERA" --set sync.resend_period_s=inf
+expect 2 "sync.resend_max_period_s must not be below sync.resend_period_s" rgbd-tracker --camera "$CAMERA" --set sync.resend_period_s=2,sync.resend_max_period_s=0.5
+expect 2 "sync.map_period_s: 'inf' is not a number" rgbd-mapper --camera "$CAMERA" --set sync.map_period_s=inf --state-dir none
+expect 2 "mapper.keyframe_min_depth_m must be below mapper.keyframe_max_depth_m" rgbd-mapper --camera "$CAMERA" --set mapper.keyframe_min_depth_m=9 --state-dir none
+expect 2 "tracker.keyframe_min_depth_m must be below" rgbd-slam --source synth:room,frames=3 --set tracker.keyframe_max_depth_m=0.2 --output "$WORK/t.txt"
 expect 2 "rate: 'nan' is not a finite number" rgbd-capture --source synth:room,frames=3 --rate nan
 
 # Messages that named the wrong problem.

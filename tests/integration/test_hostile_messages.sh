@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Issue 13, messages: small hostile messages on every subscribed channel, each of which
 # crashed a process or cost gigabytes before (a map claiming 2^28 acknowledged ids, a keyframe
-# claiming 10^8 measurements, a status claiming 10^8 counters, a keyframe with pyramid level
-# 4, a keyframe at 1e155 m), then poses of two maps on SLAM_POSE. rgbd-tracker, rgbd-mapper
+# claiming 10^8 measurements, a status claiming 10^8 counters sent where the mapper reads the
+# tracker's map receipts, a keyframe with pyramid level 4, a keyframe at 1e155 m), then poses of two maps on SLAM_POSE. rgbd-tracker, rgbd-mapper
 # and pose-logger must log and count every one, stay small and alive, and exit 0 on SIGINT;
 # pose-logger keeps the first map's poses and reports the other map's.
 # All inside a private network namespace (scripts/netns-run).
@@ -23,7 +23,7 @@ sleep 1
 send() { '$TOOLS/send-messages' --lcm-url '$LCM_URL' --channel \$1 --bad \$2 --map-id 77; sleep 0.2; }
 send SLAM_MAP map-huge-acked
 send SLAM_KEYFRAME keyframe-huge-counts
-send SLAM_STATUS status-huge-counts
+send SLAM_MAP_RECEIPT status-huge-counts
 send SLAM_KEYFRAME keyframe-level-4
 send SLAM_KEYFRAME keyframe-far
 '$TOOLS/send-messages' --lcm-url '$LCM_URL' --poses 20 --map-id 5
@@ -47,7 +47,7 @@ echo "peak resident memory [kB]: $(tr '\n' ' ' < peak_kb.txt)"
 [ "$(count 'num_measurements is 100000000' mapper.err)" = 1 ] || fail "the huge keyframe was not reported: $(cat mapper.err)"
 [ "$(count 'pyramid level 4' mapper.err)" = 1 ] || fail "the level-4 keyframe was not reported"
 [ "$(count 'beyond the world bound' mapper.err)" = 1 ] || fail "the far keyframe was not reported"
-[ "$(count 'num_counters is 100000000' mapper.err)" = 1 ] || fail "the huge status was not reported"
+[ "$(count 'bad message on SLAM_MAP_RECEIPT' mapper.err)" = 1 ] || fail "the huge status on the receipt channel was not reported"
 awk '{ if ($1 > 1500000) bad = 1 } END { exit bad }' peak_kb.txt || fail "a process grew past 1.5 GB: $(cat peak_kb.txt)"
 [ "$(grep -vc '^#' poses.txt)" = 20 ] || fail "expected map 5's 20 poses, got $(grep -vc '^#' poses.txt)"
 grep -q "20 poses (20 in the trajectory) of map 5, 0 bad messages, 10 poses of other maps (6)" logger.err \
