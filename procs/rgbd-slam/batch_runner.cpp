@@ -151,8 +151,9 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   const SlamStats stats = slam_->stats();
   std::printf("frames %ld\nposes %zu\nkeyframes %ld\nmap_points %ld\nlost_frames %ld\nbad_frames %ld\n",
               stats.frames, trajectory.size(), stats.keyframes, stats.points, stats.lost_frames, bad_frames_);
-  std::printf("keyframe_sends %ld\nmaps_applied %ld\nmaps_missing_delta %ld\nsnapshots %ld\nlink_lost %ld\n",
-              stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.snapshots, stats.link_lost);
+  std::printf("keyframe_sends %ld\nmaps_applied %ld\nmaps_missing_delta %ld\nmaps_stale %ld\nsnapshots %ld\nlink_lost %ld\n",
+              stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.maps_stale,
+              stats.snapshots, stats.link_lost);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   rusage usage{};

@@ -39,7 +39,6 @@ class MapFollower {
   int64_t mapId() const { return map_id_; }
   int64_t version() const { return version_; }
   int64_t newestSeen() const { return newest_seen_; }
-  void reset() { version_ = newest_seen_ = 0; }
 
  private:
   int64_t map_id_;
