@@ -182,9 +182,4 @@ size_t MapperSync::queueLength() const {
   return queue_.size();
 }
 
-KeyframeId MapperSync::nextId() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return next_id_;
-}
-
 }  // namespace rgbdslam

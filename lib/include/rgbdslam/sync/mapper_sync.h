@@ -101,7 +101,6 @@ class MapperSync {
   int64_t mapId() const;
   int64_t version() const;
   size_t queueLength() const;
-  KeyframeId nextId() const;
 
  private:
   bool nextReadyLocked() const { return queue_.count(next_id_) > 0; }

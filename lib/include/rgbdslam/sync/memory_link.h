@@ -47,7 +47,6 @@ class MemoryLink {
       const auto arrival = now_us + static_cast<int64_t>((options_.delay_ms + jitter_ms) * 1000.0);
       in_flight_.emplace(std::make_pair(arrival, order_++), message);
     }
-    duplicated_ += copies - 1;
   }
 
   // Every message due by now_us, in order of arrival.
@@ -60,14 +59,11 @@ class MemoryLink {
       else out.push_back(std::move(it->second));
       in_flight_.erase(it);
     }
-    delivered_ += static_cast<long>(out.size());
     return out;
   }
 
   long sent() const { std::lock_guard<std::mutex> l(mutex_); return sent_; }
   long lost() const { std::lock_guard<std::mutex> l(mutex_); return lost_; }
-  long delivered() const { std::lock_guard<std::mutex> l(mutex_); return delivered_; }
-  long duplicated() const { std::lock_guard<std::mutex> l(mutex_); return duplicated_; }
   size_t inFlight() const { std::lock_guard<std::mutex> l(mutex_); return in_flight_.size(); }
 
  private:
@@ -84,7 +80,7 @@ class MemoryLink {
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   std::multimap<std::pair<int64_t, uint64_t>, Message> in_flight_;  // (arrival, send order)
   uint64_t order_ = 0;
-  long sent_ = 0, lost_ = 0, delivered_ = 0, duplicated_ = 0;
+  long sent_ = 0, lost_ = 0;
 };
 
 }  // namespace rgbdslam
