@@ -2,11 +2,10 @@
 
 #include "rgbdslam/util/yaml_file.h"
 
+#include <algorithm>
 #include <cassert>
 #include <cctype>
 #include <cerrno>
-#include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +15,8 @@
 
 namespace rgbdslam {
 namespace {
+
+constexpr size_t kMaxNameLength = 63;  // LCM's channel name limit [bytes]
 
 std::string formatDouble(double v) {
   std::ostringstream out;
@@ -85,6 +86,24 @@ void OptionRegistry::bind(const std::string& section, const std::string& key, bo
                         return {};
                       },
                       [=] { return std::string(*field ? "true" : "false"); }});
+}
+
+void OptionRegistry::bindName(const std::string& section, const std::string& key,
+                              std::string* field, const std::string& help) {
+  const std::string name = section + "." + key;
+  add({section, key, "name", help, "name", *field,
+       [=](const std::string& text) -> Status {
+         const bool printable = std::all_of(text.begin(), text.end(), [](char c) {
+           return std::isgraph(static_cast<unsigned char>(c)) && c != '"' && c != '\'' && c != '\\';
+         });
+         if (text.empty() || text.size() > kMaxNameLength || !printable) {
+           return Error{name + ": '" + text + "' must be 1 to " + std::to_string(kMaxNameLength) +
+                        " printable characters without spaces or quotes"};
+         }
+         *field = text;
+         return {};
+       },
+       [=] { return *field; }});
 }
 
 void OptionRegistry::bind(const std::string& section, const std::string& key, std::string* field,
@@ -192,7 +211,7 @@ void OptionRegistry::requireBelow(const std::string& section, const std::string&
                                   const std::string& high) {
   const Entry* a = find(section, low);
   const Entry* b = find(section, high);
-  assert(a && b && a->kind != "choice" && b->kind != "choice");
+  assert(a && b && (a->kind == "number" || a->kind == "integer") && (b->kind == "number" || b->kind == "integer"));
   // Entries are found again at check time: entries_ may have grown (and moved) since.
   require(section + "." + low + " must be below " + section + "." + high, [this, section, low, high] {
     return *parseDouble(find(section, low)->show()) < *parseDouble(find(section, high)->show());
@@ -265,7 +284,7 @@ std::string OptionRegistry::yamlText() const {
     out << "\n" << section << ":\n";
     for (const auto& e : entries_) {
       if (e.section != section) continue;
-      const std::string value = e.kind == "choice" ? "\"" + e.show() + "\"" : e.show();
+      const std::string value = e.kind == "choice" || e.kind == "name" ? "\"" + e.show() + "\"" : e.show();
       out << "  # " << e.help << (e.unit.empty() ? "" : " [" + e.unit + "]") << "\n";
       out << "  " << e.key << ": " << value << "\n";
     }

@@ -32,6 +32,10 @@ class OptionRegistry {
             const std::string& unit, const std::string& help);
   void bind(const std::string& section, const std::string& key, bool* field,
             const std::string& help);
+  // A name chosen freely (an LCM channel, for one): 1 to 63 printable characters without
+  // spaces or quotes (LCM's own limit on a channel name is 63 bytes).
+  void bindName(const std::string& section, const std::string& key, std::string* field,
+                const std::string& help);
   // A string restricted to 'choices'.
   void bind(const std::string& section, const std::string& key, std::string* field,
             const std::vector<std::string>& choices, const std::string& help);
