@@ -11,9 +11,10 @@ CommandLine::CommandLine(std::string program, std::string summary)
     : program_(std::move(program)), summary_(std::move(summary)) {}
 
 void CommandLine::option(const std::string& name, const std::string& value_name,
-                         const std::string& help, const std::string& default_value) {
+                         const std::string& help, const std::string& default_value,
+                         bool repeatable) {
   order_.push_back(name);
-  specs_[name] = Spec{value_name, help, default_value, false};
+  specs_[name] = Spec{value_name, help, default_value, false, repeatable};
 }
 
 void CommandLine::flag(const std::string& name, const std::string& help) {
@@ -54,7 +55,12 @@ Status CommandLine::parse(int argc, char** argv) {
       if (i + 1 >= argc) return Error{"option --" + name + " needs a value (" + spec->second.value_name + ")"};
       value = argv[++i];
     }
-    values_[name] = value;
+    const auto given = values_.find(name);
+    if (given != values_.end() && spec->second.repeatable) {
+      given->second += "," + value;
+    } else {
+      values_[name] = value;
+    }
   }
   if (positional_values_.size() < positional_specs_.size()) {
     return Error{"missing argument " + positional_specs_[positional_values_.size()].first + " (see --help)"};

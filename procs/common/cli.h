@@ -13,9 +13,10 @@ namespace rgbdslam {
 class CommandLine {
  public:
   CommandLine(std::string program, std::string summary);
-  // An option taking a value; 'help' should say the unit and the default.
+  // An option taking a value; 'help' should say the unit and the default. A repeatable
+  // option may be given more than once; get() joins its values with commas.
   void option(const std::string& name, const std::string& value_name, const std::string& help,
-              const std::string& default_value = "");
+              const std::string& default_value = "", bool repeatable = false);
   void flag(const std::string& name, const std::string& help);
   void positional(const std::string& name, const std::string& help);
 
@@ -39,6 +40,7 @@ class CommandLine {
   struct Spec {
     std::string value_name, help, default_value;
     bool is_flag = false;
+    bool repeatable = false;
   };
   std::string program_, summary_;
   std::vector<std::string> order_;

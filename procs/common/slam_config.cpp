@@ -21,7 +21,7 @@ std::vector<std::string> splitAssignments(const std::string& text) {
 void addSlamConfigOptions(CommandLine& cli) {
   cli.option("mode", "M", "mono | depth-init | depth-ba (overrides slam.mode)", "depth-ba");
   cli.option("config", "FILE", "SLAM configuration (see config/slam.yaml)", "built-in defaults");
-  cli.option("set", "SECTION.KEY=VALUE", "override one configuration option (repeatable by commas)");
+  cli.option("set", "SECTION.KEY=VALUE", "override configuration options: SECTION.KEY=VALUE[,...]; may be given more than once", "", /*repeatable=*/true);
   cli.option("print-config", "yaml|markdown", "print the effective configuration (loadable YAML, or a table) and exit");
 }
 
@@ -29,6 +29,7 @@ Expected<SlamConfig> loadSlamConfig(const CommandLine& cli) {
   SlamConfig config;
   config.registry = std::make_unique<OptionRegistry>();
   config.slam->bind(config.registry.get());
+  config.procs->bind(config.registry.get());
   if (cli.has("config")) {
     if (Status s = config.registry->load(cli.get("config")); !s) return Error{s.error()};
   }

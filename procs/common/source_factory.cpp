@@ -2,14 +2,11 @@
 
 #include "common/lcm_log_source.h"
 #include "common/openni2_source.h"
+#include "common/process_options.h"
 #include "rgbdslam/synth/scene.h"
 #include "rgbdslam/io/tum_dataset.h"
 
 namespace rgbdslam {
-namespace {
-constexpr const char* kDefaultFrameChannel = "RGBD_FRAME";
-}
-
 Expected<SourceSpec> parseSourceSpec(const std::string& text) {
   const size_t colon = text.find(':');
   if (colon == std::string::npos || colon == 0) {
@@ -39,7 +36,7 @@ Expected<std::unique_ptr<FrameSource>> openSource(const std::string& text,
     return makeSyntheticSource(*options);
   }
   if (spec->kind == "openni2") return openOpenNI2Source(spec->argument, OpenNI2Options{});
-  std::string path = spec->argument, channel = kDefaultFrameChannel;
+  std::string path = spec->argument, channel = ChannelOptions{}.frame;
   const size_t at = path.rfind('@');
   if (at != std::string::npos) {
     channel = path.substr(at + 1);

@@ -6,6 +6,7 @@
 #include "common/cli.h"
 #include "common/lcm_conversions.h"
 #include "common/process.h"
+#include "common/process_options.h"
 #include "pose-logger/pose_log_writer.h"
 
 using namespace rgbdslam;
@@ -58,7 +59,7 @@ CommandLine makeCommandLine() {
   CommandLine cli("pose-logger", "Writes the poses on SLAM_POSE to a TUM trajectory and a CSV.");
   cli.option("output", "TRAJ.txt", "TUM trajectory file: 't tx ty tz qx qy qz qw' per tracked pose");
   cli.option("csv", "FILE", "CSV of every pose with state, points, quality, latency", "TRAJ with .csv");
-  cli.option("channel", "NAME", "LCM channel to subscribe", "SLAM_POSE");
+  cli.option("channel", "NAME", "LCM channel to subscribe (the suite's channels.pose)", ChannelOptions{}.pose);
   cli.option("map-id", "ID", "log this map's poses (pose_t.map_id >= 0); poses of other maps are counted and reported", "the first map seen");
   addLcmUrlOption(cli);
   return cli;

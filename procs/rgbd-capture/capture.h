@@ -10,6 +10,7 @@
 
 #include "common/cli.h"
 #include "common/lcm_conversions.h"
+#include "common/process_options.h"
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/io/frame_source.h"
 #include "rgbdslam/io/trajectory_io.h"
@@ -28,7 +29,7 @@ struct CaptureOptions {
   std::string camera_path;            // calibration file; empty = none
   std::optional<double> rate_hz;      // [frames/s]; 0 = unpaced; nullopt = recorded timestamps
   bool step = false;                  // one frame per Enter key
-  std::string channel = "RGBD_FRAME";
+  std::string channel = ChannelOptions{}.frame;
   FrameEncoding encoding;
   long max_frames = 0;                // 0 = all
   std::string groundtruth_out;        // where to write the source's ground truth; empty = nowhere

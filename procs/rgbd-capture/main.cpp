@@ -5,6 +5,7 @@
 #include "common/cli.h"
 #include "common/openni2_source.h"
 #include "common/process.h"
+#include "common/process_options.h"
 #include "rgbd-capture/capture.h"
 
 using namespace rgbdslam;
@@ -17,7 +18,7 @@ CommandLine makeCommandLine() {
   cli.option("camera", "FILE", "camera calibration YAML (required for tum:; frames are checked against it)");
   cli.option("rate", "HZ", "publishing rate [frames/s]; 0 = as fast as possible; unset = the recorded timestamps");
   cli.flag("step", "publish one frame per Enter key pressed on standard input");
-  cli.option("channel", "NAME", "LCM channel to publish on", "RGBD_FRAME");
+  cli.option("channel", "NAME", "LCM channel to publish on (the suite's channels.frame)", ChannelOptions{}.frame);
   cli.option("colour", "raw|jpeg", "colour encoding on the wire (raw is lossless)", "raw");
   cli.option("jpeg-quality", "Q", "JPEG quality [1-100] when --colour jpeg", "90");
   cli.option("depth", "raw|zlib", "depth encoding on the wire (both lossless)", "zlib");

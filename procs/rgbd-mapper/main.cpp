@@ -20,28 +20,9 @@ CommandLine makeCommandLine() {
   addSlamConfigOptions(cli);
   cli.option("state-dir", "DIR", "folder of the persisted map (journal); 'none' persists nothing", "mapper-state");
   cli.flag("fresh", "start a new map: move an existing journal aside (map.journal.old) first");
-  cli.option("keyframe-channel", "NAME", "keyframes from the tracker", "SLAM_KEYFRAME");
-  cli.option("map-channel", "NAME", "map versions to the tracker", "SLAM_MAP");
-  cli.option("status-channel", "NAME", "health reports", "MAPPER_STATUS");
-  cli.option("receipt-channel", "NAME", "the tracker's map receipts (the version it holds)", "SLAM_MAP_RECEIPT");
-  cli.option("status-period", "S", "status reports this often [s]", "1");
+  // Channels and periods are configuration (sections channels, mapper_node, sync).
   addLcmUrlOption(cli);
   return cli;
-}
-
-// The map protocol's periods and limits come from the configuration (section "sync").
-Expected<MapperNodeOptions> nodeOptions(const CommandLine& cli, const SyncOptions& sync) {
-  MapperNodeOptions o;
-  o.sync = sync.mapper;
-  o.keyframe_channel = cli.get("keyframe-channel");
-  o.map_channel = cli.get("map-channel");
-  o.status_channel = cli.get("status-channel");
-  o.receipt_channel = cli.get("receipt-channel");
-  o.state_dir = cli.get("state-dir") == "none" ? "" : cli.get("state-dir");
-  auto period = cli.getDouble("status-period", 1e-3, kMaxPeriodS);
-  if (!period) return Error{period.error() + " [s]"};
-  o.status_period_s = *period;
-  return o;
 }
 
 // --fresh: keeps the previous journal as map.journal.old rather than deleting it.
@@ -69,18 +50,18 @@ int main(int argc, char** argv) {
   if (!cli.has("camera")) return usageError("rgbd-mapper", "--camera is required (see --help)");
   auto camera = loadCamera(cli.get("camera"));
   if (!camera) return usageError("rgbd-mapper", camera.error());
-  auto options = nodeOptions(cli, config->slam->sync);
-  if (!options) return usageError("rgbd-mapper", options.error());
-  if (cli.has("fresh") && !options->state_dir.empty()) {
-    if (Status moved = moveJournalAside(options->state_dir); !moved) return usageError("rgbd-mapper", moved.error());
+  const MapperNodeOptions options{config->procs->channels, config->procs->mapper_node, config->slam->sync.mapper,
+                                  cli.get("state-dir") == "none" ? "" : cli.get("state-dir")};
+  if (cli.has("fresh") && !options.state_dir.empty()) {
+    if (Status moved = moveJournalAside(options.state_dir); !moved) return usageError("rgbd-mapper", moved.error());
   }
   auto lcm = openLcm(cli.get("lcm-url"));
   if (!lcm) return usageError("rgbd-mapper", lcm.error());
   std::cerr << "rgbd-mapper: camera " << camera->name << ", state "
-            << (options->state_dir.empty() ? "not persisted" : options->state_dir) << ", lcm-url "
+            << (options.state_dir.empty() ? "not persisted" : options.state_dir) << ", lcm-url "
             << cli.get("lcm-url") << "\nconfiguration:\n" << config->registry->describe();
 
-  MapperNode node(lcm->get(), *camera, config->slam->mapper, *parseSlamMode(config->slam->mode), *options);
+  MapperNode node(lcm->get(), *camera, config->slam->mapper, *parseSlamMode(config->slam->mode), options);
   if (Status restored = node.restore(); !restored) return usageError("rgbd-mapper", restored.error());
   node.run(installStopHandlers());
   node.printSummary();

