@@ -123,7 +123,10 @@ int main(int argc, char** argv) {
   Relay relay(to->get(), static_cast<int64_t>(*delay_ms * 1000),
               static_cast<size_t>(*max_queue), static_cast<size_t>(*max_queue_mb * 1024 * 1024));
   // LCM's own per-subscription queue (30 messages by default) must not drop before ours.
-  auto subscription = subscribeRaw(from->get(), cli.get("channels"), &relay, &Relay::onMessage);
+  // LCM anchors a subscription as "^REGEX$", which binds to the first and last alternatives
+  // only: 'SLAM_MAP|MAPPER_STATUS' would also take SLAM_MAP_RECEIPT (the relay the other way
+  // then sends the receipts round for ever). The group anchors every alternative.
+  auto subscription = subscribeRaw(from->get(), "(" + cli.get("channels") + ")", &relay, &Relay::onMessage);
   subscription->setQueueCapacity(static_cast<int>(std::min<long>(*max_queue, 1000000)));
   std::cerr << "lcm-link-relay: " << cli.get("channels") << " from " << cli.get("from") << " to "
             << cli.get("to") << " after " << *delay_ms << " ms\n";
