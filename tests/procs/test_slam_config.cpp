@@ -50,7 +50,7 @@ TEST(SlamConfig, OutOfRangeProcessOptionsAreErrorsNamingTheKey) {
            {"tracker_node.max_backlog_frames=4294967296", "tracker_node.max_backlog_frames: 4294967296 is outside [1, 1000]"},
            {"tracker_node.status_period_s=nan", "tracker_node.status_period_s: 'nan' is not a number"},
            {"mapper_node.status_period_s=0", "mapper_node.status_period_s: 0 is outside"},
-           {"channels.pose=TWO WORDS", "channels.pose: 'TWO WORDS' must be 1 to 63 printable"},
+           {"channels.pose=TWO WORDS", "channels.pose: 'TWO WORDS' must be 1 to 63 letters, digits"},
            {"tracker_node.keyframe_grey=gif", "tracker_node.keyframe_grey: 'gif' is not one of jpeg|png"}}) {
     auto config = load({"--set", assignment});
     ASSERT_FALSE(config) << assignment;

@@ -101,13 +101,14 @@ TEST(OptionRegistry, BindsAFreeNameWithinLcmsChannelRules) {
   EXPECT_NE(r.yamlText().find("  map: \"SLAM_MAP\"\n"), std::string::npos) << r.yamlText();
   ASSERT_TRUE(r.set("channels.map=DRONE2_MAP"));
   EXPECT_EQ(channel, "DRONE2_MAP");
-  for (const std::string& bad : std::vector<std::string>{"", "TWO WORDS", "QUOTE\"D", std::string(64, 'A')}) {
+  for (const std::string& bad : std::vector<std::string>{"", "TWO WORDS", "QUOTE\"D", "SLAM_MAP|X", "SLAM.*", std::string(64, 'A')}) {
     const Status s = r.set("channels.map=" + bad);
     ASSERT_FALSE(s) << bad;
     EXPECT_NE(s.error().find("channels.map: '"), std::string::npos) << s.error();
     EXPECT_EQ(channel, "DRONE2_MAP");
   }
   EXPECT_TRUE(r.set("channels.map=" + std::string(63, 'A')));
+  EXPECT_TRUE(r.set("channels.map=drone-2/SLAM_MAP"));
 }
 
 }  // namespace

@@ -93,12 +93,12 @@ void OptionRegistry::bindName(const std::string& section, const std::string& key
   const std::string name = section + "." + key;
   add({section, key, "name", help, "name", *field,
        [=](const std::string& text) -> Status {
-         const bool printable = std::all_of(text.begin(), text.end(), [](char c) {
-           return std::isgraph(static_cast<unsigned char>(c)) && c != '"' && c != '\'' && c != '\\';
+         const bool plain = std::all_of(text.begin(), text.end(), [](char c) {
+           return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '/';
          });
-         if (text.empty() || text.size() > kMaxNameLength || !printable) {
+         if (text.empty() || text.size() > kMaxNameLength || !plain) {
            return Error{name + ": '" + text + "' must be 1 to " + std::to_string(kMaxNameLength) +
-                        " printable characters without spaces or quotes"};
+                        " letters, digits, '_', '-' or '/'"};
          }
          *field = text;
          return {};

@@ -32,8 +32,9 @@ class OptionRegistry {
             const std::string& unit, const std::string& help);
   void bind(const std::string& section, const std::string& key, bool* field,
             const std::string& help);
-  // A name chosen freely (an LCM channel, for one): 1 to 63 printable characters without
-  // spaces or quotes (LCM's own limit on a channel name is 63 bytes).
+  // A name chosen freely (an LCM channel, for one): 1 to 63 letters, digits, '_', '-' or
+  // '/' (LCM's limit on a channel name is 63 bytes; LCM subscribes by regular expression, so
+  // a name keeps clear of the characters that would make it match other channels).
   void bindName(const std::string& section, const std::string& key, std::string* field,
                 const std::string& help);
   // A string restricted to 'choices'.
