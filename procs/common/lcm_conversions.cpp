@@ -508,6 +508,7 @@ rgbdslam::map_receipt_t toLcm(const MapReceipt& receipt) {
   msg.newest_version_seen = receipt.newest_version_seen;
   msg.keyframes_created = receipt.keyframes_created;
   msg.keyframes_unacked = receipt.keyframes_unacked;
+  msg.keyframes_sendable_from = receipt.keyframes_sendable_from;
   return msg;
 }
 
@@ -522,6 +523,10 @@ Expected<MapReceipt> fromLcm(const rgbdslam::map_receipt_t& msg) {
     return Error{"map receipt with " + std::to_string(msg.keyframes_unacked) + " of " +
                  std::to_string(msg.keyframes_created) + " keyframes unacknowledged"};
   }
+  if (msg.keyframes_sendable_from < 0 || msg.keyframes_sendable_from > msg.keyframes_created) {
+    return Error{"map receipt that can send from keyframe " + std::to_string(msg.keyframes_sendable_from) +
+                 " of " + std::to_string(msg.keyframes_created) + " (need 0 <= from <= created)"};
+  }
   MapReceipt r;
   r.utime = msg.utime;
   r.map_id = msg.map_id;
@@ -529,6 +534,7 @@ Expected<MapReceipt> fromLcm(const rgbdslam::map_receipt_t& msg) {
   r.newest_version_seen = msg.newest_version_seen;
   r.keyframes_created = msg.keyframes_created;
   r.keyframes_unacked = msg.keyframes_unacked;
+  r.keyframes_sendable_from = msg.keyframes_sendable_from;
   return r;
 }
 

@@ -158,7 +158,7 @@ Status checkWire(const rgbdslam::pose_t*, const void* data, size_t size) {
 Status checkWire(const rgbdslam::map_receipt_t*, const void* data, size_t size) {
   WireReader r(data, size, rgbdslam::map_receipt_t::getTypeName());
   r.fingerprint(rgbdslam::map_receipt_t::getHash());
-  r.skip(6 * 8, "utime, map_id, applied_version, newest_version_seen, keyframes_created, keyframes_unacked");
+  r.skip(7 * 8, "utime, map_id, applied_version, newest_version_seen, keyframes_created, keyframes_unacked, keyframes_sendable_from");
   return r.finish();
 }
 

@@ -181,6 +181,8 @@ void MapperNode::publishStatus() {
                      {"snapshots_requested", c.snapshots_asked},
                      {"bad_receipts", bad_receipts_.load()},
                      {"receipts_implausible", c.receipts_implausible},
+                     {"versions_caught_up", c.versions_caught_up},
+                     {"keyframes_skipped", c.keyframes_skipped},
                      {"map_bytes", map_bytes_.load()},
                      {"journal_errors", c.journal_errors}};
   status.timings_ms = {{"integrate_ms_median", integrate_ms_.quantile(0.5)},
@@ -215,7 +217,12 @@ void MapperNode::printSummary() const {
             << c.duplicates << ", out of order " << c.out_of_order << ", foreign map " << c.foreign
             << ", bad messages " << bad_messages_ << ", bad keyframes " << c.refused << "; "
             << c.maps_published << " maps published (" << c.snapshots_published << " snapshots, "
-            << c.snapshots_asked << " asked for by a stuck tracker, " << map_bytes_ << " bytes)\n";
+            << c.snapshots_asked << " asked for by a stuck tracker, " << map_bytes_ << " bytes)";
+  if (c.versions_caught_up > 0 || c.keyframes_skipped > 0) {
+    std::cerr << "; the journal had lost versions (caught up with the tracker " << c.versions_caught_up
+              << " times) and " << c.keyframes_skipped << " keyframes the tracker no longer held (skipped)";
+  }
+  std::cerr << "\n";
 }
 
 }  // namespace rgbdslam

@@ -164,8 +164,11 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
   const MapReceiveResult r = sync_.receive(*update, steadyUs(now),
                                            [this](const MapUpdate& u) { return tracker_.applyMap(u); });
   for (double age_s : r.ack_latencies_s) ack_ms_.add(age_s * 1000.0);
-  counters_.keyframes_acked += static_cast<long>(r.ack_latencies_s.size());
   const int64_t holding = sync_.follower().version();
+  if (r.resent_after_loss > 0) {
+    std::cerr << "rgbd-tracker: the mapper lost acknowledged keyframes (map version " << update->version
+              << " acknowledges fewer); sending the " << r.resent_after_loss << " it still holds again\n";
+  }
   switch (r.verdict) {
     case MapVerdict::kApply:
       ++counters_.maps_applied;
@@ -215,9 +218,10 @@ void TrackerNode::publishStatus() {
                      {"map_version", sync_.follower().version()},
                      {"map_version_newest_seen", sync_.follower().newestSeen()},
                      {"keyframes", c.keyframes},
-                     {"keyframes_acked", c.keyframes_acked},
+                     {"keyframes_acked", keyframesAcked()},
                      {"keyframes_unacked", static_cast<int64_t>(sync_.outbox().size())},
                      {"keyframe_sends", c.keyframe_sends},
+                     {"mapper_losses", sync_.mapperLosses()},
                      {"keyframe_bytes", c.keyframe_bytes},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
                      {"frames", c.frames},
@@ -259,8 +263,9 @@ void TrackerNode::printSummary() const {
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
-              c.keyframes, c.keyframes_acked, sync_.outbox().size(), c.keyframe_sends, c.keyframe_bytes);
-  std::printf("map_version_newest_seen %lld\n", static_cast<long long>(sync_.follower().newestSeen()));
+              c.keyframes, keyframesAcked(), sync_.outbox().size(), c.keyframe_sends, c.keyframe_bytes);
+  std::printf("map_version_newest_seen %lld\nmapper_losses %ld\n", static_cast<long long>(sync_.follower().newestSeen()),
+              sync_.mapperLosses());
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",
               static_cast<long long>(sync_.follower().version()), c.maps_received, c.maps_applied, c.maps_stale,
               c.maps_missing_delta, c.maps_foreign);

@@ -50,6 +50,8 @@ class TrackerNode {
   // were left unacknowledged.
   int run(const std::atomic<bool>& stop);
   void printSummary() const;
+  // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
+  long keyframesAcked() const { return counters_.keyframes - static_cast<long>(sync_.outbox().size()); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -85,7 +87,7 @@ class TrackerNode {
 
   struct Counters {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
-         bad_map_messages = 0, keyframes = 0, keyframe_sends = 0, keyframes_acked = 0,
+         bad_map_messages = 0, keyframes = 0, keyframe_sends = 0,
          maps_received = 0, maps_applied = 0, maps_stale = 0, maps_foreign = 0,
          maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0;
   };

@@ -40,6 +40,30 @@ TEST(SyncOutbox, ResendsWithDoublingIntervalOldestFirstUntilAcknowledged) {
   }
 }
 
+TEST(SyncOutbox, RetainsTheNewestAcknowledgedForAMapperThatLosesThem) {
+  KeyframeOutboxOptions options{1.0, 4.0, 2};
+  options.retained = 2;
+  KeyframeOutbox<int> outbox(options);
+  for (int id = 0; id < 4; ++id) outbox.sent(id, 100 + id, 0);
+  outbox.acknowledge({0, 1, 2, 3}, kS / 2);
+  EXPECT_TRUE(outbox.empty());
+  EXPECT_EQ(outbox.oldestSendable(4), 2) << "keyframes 0 and 1 are gone for good";
+  EXPECT_EQ(outbox.resendFrom(1, kS), 2);  // the mapper lost keyframes 1 on
+  auto due = outbox.resendsDue(kS);         // at once, oldest first
+  ASSERT_EQ(due.size(), 2u);
+  EXPECT_EQ(*due[0], 102);
+  EXPECT_EQ(*due[1], 103);
+  EXPECT_EQ(outbox.oldestSendable(4), 2);
+  outbox.acknowledge({2, 3}, 2 * kS);
+  EXPECT_EQ(outbox.oldestSendable(4), 2) << "retained again";
+  options.retained = 0;
+  KeyframeOutbox<int> none(options);
+  none.sent(0, 100, 0);
+  none.acknowledge({0}, kS);
+  EXPECT_EQ(none.oldestSendable(1), 1);
+  EXPECT_EQ(none.resendFrom(0, kS), 0);
+}
+
 MapUpdate update(int64_t map_id, int64_t version, bool snapshot) {
   MapUpdate u;
   u.map_id = map_id;
@@ -151,12 +175,24 @@ TEST(SyncPublisher, ReceiptsShowingAStuckTrackerBringASnapshot) {
   r.applied_version = r.newest_version_seen = 6;
   EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kNoted);
   EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kSnapshotAsked);
-  // A receipt for a version never published, or another map, is refused.
-  r.applied_version = r.newest_version_seen = 99;
-  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kImplausible);
+  // A receipt for another map, or for a version further ahead than a tracker accepts, is
+  // refused.
   r.map_id = 10;
   EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kForeignMap);
+  r.map_id = 9;
+  r.applied_version = r.newest_version_seen = 7 + MapFollower::kDefaultMaxVersionStep + 1;
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kImplausible);
+  EXPECT_EQ(publisher.version(), 7);
   EXPECT_EQ(publisher.snapshotsAsked(), 3);
+  // A version never published, within reach: the tracker holds versions of a mapper run
+  // whose journal lost them. Versions go on after it, with a snapshot.
+  r.applied_version = r.newest_version_seen = 99;
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kCaughtUp);
+  auto after = publisher.publishDue(m.map, 1, 7 * kS);
+  ASSERT_TRUE(after);
+  EXPECT_TRUE(after->is_snapshot);
+  EXPECT_EQ(after->version, 100);
+  EXPECT_EQ(publisher.versionsCaughtUp(), 1);
 }
 
 TEST(SyncLink, LosesDelaysDuplicatesAndReordersRepeatably) {

@@ -63,9 +63,15 @@ KeyframeData makeKeyframe(const PinholeCamera& camera, KeyframeId k) {
   return kf;
 }
 
+KeyframeOutboxOptions retaining(int retained) {
+  KeyframeOutboxOptions o;
+  o.retained = retained;
+  return o;
+}
+
 struct Rig {
-  explicit Rig(const LinkOptions& up_link, const LinkOptions& down_link)
-      : camera(smallCamera()), replica(camera), tracker(kMapId, KeyframeOutboxOptions{}),
+  explicit Rig(const LinkOptions& up_link, const LinkOptions& down_link, int retained = 64)
+      : camera(smallCamera()), replica(camera), tracker(kMapId, retaining(retained)),
         up(up_link), down(down_link), receipts(up_link) {
     startMapper();
   }
@@ -79,6 +85,15 @@ struct Rig {
 
   // A mapper process killed and started again on the same journal.
   void restartMapper() {
+    startMapper();
+    ASSERT_TRUE(sync->restore(journal.keyframes, journal.last_version));
+  }
+
+  // ...on a journal cut short by a corrupt record: only the first 'keep' keyframes and the
+  // versions published before the next one was acknowledged survive.
+  void restartMapperOnCutJournal(size_t keep) {
+    journal.keyframes.resize(keep);
+    journal.last_version = keep == 0 ? 0 : published.at(keep - 1);
     startMapper();
     ASSERT_TRUE(sync->restore(journal.keyframes, journal.last_version));
   }
@@ -233,6 +248,64 @@ TEST(SyncProtocol, MapperRestartFromItsJournalLosesNothingAndVersionsGoOn) {
   rig.expectConsistent();
   EXPECT_GT(rig.published.back(), version_before);
   EXPECT_EQ(rig.verdicts[MapVerdict::kStale], 0) << "a restarted mapper never re-uses a version";
+}
+
+// Issue 13: a corrupt journal record cut the journal short, acknowledged keyframes were lost,
+// and since the tracker never re-sent acknowledged keyframes the mapper waited for ever (and
+// its versions, journaled too, went backwards: every map was stale to the tracker).
+TEST(SyncProtocol, JournalThatLostAcknowledgedKeyframesGetsThemSentAgain) {
+  Rig rig(link(0, 50, 1), link(0, 50, 2));
+  rig.fly(10, 0.5);
+  ASSERT_TRUE(rig.settle(10));
+  const int64_t tracker_version = rig.tracker.follower().version();
+  rig.restartMapperOnCutJournal(4);  // keyframes 4..9 and the versions after them are lost
+  ASSERT_LT(rig.sync->version(), tracker_version);
+  rig.fly(4, 0.5);
+  ASSERT_TRUE(rig.settle(30));
+  rig.expectConsistent();  // every keyframe, the lost ones included
+  const MapperSync::Counters c = rig.sync->counters();
+  EXPECT_EQ(c.versions_caught_up, 1);
+  EXPECT_EQ(c.keyframes_skipped, 0);
+  EXPECT_EQ(c.integrated, 10) << "6 sent again, 4 new";
+  EXPECT_EQ(rig.tracker.mapperLosses(), 1);
+  EXPECT_GT(rig.tracker.follower().version(), tracker_version);
+}
+
+TEST(SyncProtocol, JournalLossBeyondWhatTheTrackerRetainsIsSkippedNotWaitedFor) {
+  Rig rig(link(0, 50, 1), link(0, 50, 2), /*retained=*/3);
+  rig.fly(10, 0.5);
+  ASSERT_TRUE(rig.settle(10));
+  rig.restartMapperOnCutJournal(4);  // 4..9 lost; the tracker still holds 7..9
+  rig.fly(3, 0.5);
+  ASSERT_TRUE(rig.settle(30));
+  const MapperSync::Counters c = rig.sync->counters();
+  EXPECT_EQ(c.keyframes_skipped, 3) << "keyframes 4, 5 and 6";
+  EXPECT_EQ(c.integrated, 6) << "7..9 sent again, 10..12 new";
+  const Map& truth = rig.mapper->map();
+  EXPECT_EQ(truth.numKeyframes(), 10u);
+  for (KeyframeId id : {4, 5, 6}) EXPECT_FALSE(truth.hasKeyframe(id)) << id;
+  // The replica's points follow the mapper (the skipped keyframes' points are gone); the
+  // tracker keeps its own copies of the skipped keyframes, which no point refers to.
+  EXPECT_EQ(rig.replica.map().numPoints(), truth.numPoints());
+  for (const auto& [id, point] : rig.replica.map().points()) EXPECT_TRUE(truth.hasKeyframe(point.source_keyframe)) << id;
+  EXPECT_TRUE(rig.tracker.outbox().empty());
+}
+
+TEST(SyncProtocol, WholeJournalLostTheMapGoesOnFromTheKeyframesThatStillCome) {
+  Rig rig(link(0, 50, 1), link(0, 50, 2), /*retained=*/3);
+  rig.fly(6, 0.5);
+  ASSERT_TRUE(rig.settle(10));
+  rig.restartMapperOnCutJournal(0);
+  rig.fly(3, 0.5);
+  ASSERT_TRUE(rig.settle(30));
+  const MapperSync::Counters c = rig.sync->counters();
+  EXPECT_EQ(rig.sync->mapId(), kMapId);
+  EXPECT_EQ(c.keyframes_skipped, 6);
+  EXPECT_EQ(c.integrated, 3);
+  EXPECT_EQ(rig.mapper->map().numKeyframes(), 3u);
+  EXPECT_EQ(rig.tracker.follower().version(), rig.sync->version());
+  EXPECT_EQ(rig.replica.map().numPoints(), rig.mapper->map().numPoints());
+  EXPECT_TRUE(rig.tracker.outbox().empty());
 }
 
 TEST(SyncProtocol, DuplicatedAndReorderedKeyframesAreIntegratedOnceInOrder) {

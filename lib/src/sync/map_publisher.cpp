@@ -1,5 +1,7 @@
 #include "rgbdslam/sync/map_publisher.h"
 
+#include <algorithm>
+
 namespace rgbdslam {
 
 const char* toString(ReceiptVerdict verdict) {
@@ -7,6 +9,7 @@ const char* toString(ReceiptVerdict verdict) {
     case ReceiptVerdict::kNoted: return "noted";
     case ReceiptVerdict::kSnapshotAsked: return "snapshot_asked";
     case ReceiptVerdict::kForeignMap: return "foreign_map";
+    case ReceiptVerdict::kCaughtUp: return "caught_up";
     case ReceiptVerdict::kImplausible: return "implausible";
   }
   return "?";
@@ -32,9 +35,16 @@ void MapPublisher::note(const MapChanges& changes, bool integrated) {
 
 ReceiptVerdict MapPublisher::onReceipt(const MapReceipt& receipt) {
   if (!started() || receipt.map_id != map_id_) return ReceiptVerdict::kForeignMap;
-  if (receipt.applied_version > version_ || receipt.newest_version_seen > version_ ||
-      receipt.applied_version < 0) {
+  const int64_t claimed = std::max(receipt.applied_version, receipt.newest_version_seen);
+  if (receipt.applied_version < 0 || receipt.newest_version_seen < 0 ||
+      claimed - version_ > MapFollower::kDefaultMaxVersionStep) {
     return ReceiptVerdict::kImplausible;
+  }
+  if (claimed > version_) {
+    version_ = claimed;  // the next version is newer than anything the tracker holds
+    snapshot_due_ = true;
+    ++versions_caught_up_;
+    return ReceiptVerdict::kCaughtUp;
   }
   const bool holds_unapplied = receipt.newest_version_seen > receipt.applied_version &&
                                receipt.newest_version_seen > last_snapshot_version_;

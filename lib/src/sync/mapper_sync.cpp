@@ -1,5 +1,7 @@
 #include "rgbdslam/sync/mapper_sync.h"
 
+#include <algorithm>
+
 namespace rgbdslam {
 
 const char* toString(IntakeVerdict verdict) {
@@ -19,7 +21,7 @@ Status MapperSync::restore(const std::vector<IncomingKeyframe>& journaled, int64
   std::lock_guard<std::mutex> lock(mutex_);
   for (const IncomingKeyframe& incoming : journaled) {
     const KeyframeData& kf = incoming.keyframe;
-    if (kf.id != next_id_ || (map_id_ != 0 && kf.map_id != map_id_)) {
+    if (kf.id < next_id_ || (map_id_ != 0 && kf.map_id != map_id_)) {
       return Error{"journaled keyframe " + std::to_string(kf.id) + " of map " +
                    std::to_string(kf.map_id) + " does not follow keyframe " +
                    std::to_string(next_id_ - 1) + " of map " + std::to_string(map_id_)};
@@ -68,9 +70,44 @@ IntakeVerdict MapperSync::offer(IncomingKeyframe incoming) {
 
 ReceiptVerdict MapperSync::onReceipt(const MapReceipt& receipt) {
   std::lock_guard<std::mutex> lock(mutex_);
+  skipUnsendableLocked(receipt);
   const ReceiptVerdict verdict = publisher_.onReceipt(receipt);
   if (verdict == ReceiptVerdict::kImplausible) ++counters_.receipts_implausible;
+  if (verdict == ReceiptVerdict::kCaughtUp) ++counters_.versions_caught_up;
   return verdict;
+}
+
+// Only a keyframe of that map waiting here makes the receipt's claim believable: a forged
+// receipt alone skips nothing.
+void MapperSync::skipUnsendableLocked(const MapReceipt& receipt) {
+  const KeyframeId from = receipt.keyframes_sendable_from;
+  if (receipt.map_id <= 0 || from <= next_id_ || from > receipt.keyframes_created) return;
+  if (queue_.count(next_id_)) return;
+  KeyframeId to = from;
+  if (map_id_ == receipt.map_id) {
+    if (!queue_.count(from)) return;  // the tracker sends it (again): wait for it
+  } else if (map_id_ == 0) {
+    // The whole journal is gone. The oldest keyframe of that map waiting here is where the
+    // map starts again (the tracker has no map message that would make it re-send older
+    // retained ones); versions go on after the tracker's.
+    const auto it = std::find_if(queue_.lower_bound(from), queue_.end(), [&](const auto& entry) {
+      return entry.second.keyframe.map_id == receipt.map_id;
+    });
+    const int64_t claimed = std::max(receipt.applied_version, receipt.newest_version_seen);
+    if (it == queue_.end() || claimed < 0 || claimed > MapFollower::kDefaultMaxVersionStep) return;
+    to = it->first;
+    map_id_ = receipt.map_id;
+    publisher_.start(map_id_, claimed);
+    dropForeignLocked();
+  } else {
+    return;
+  }
+  counters_.keyframes_skipped += to - next_id_;
+  next_id_ = to;
+  queue_.erase(queue_.begin(), queue_.lower_bound(next_id_));
+  publisher_.acknowledgementDue();
+  interrupt_ = true;
+  wake_.notify_all();
 }
 
 // Keyframes queued before the map had a name that are of another map.

@@ -34,6 +34,13 @@ int64_t steadyNowUs() {
       .count();
 }
 
+// In one process the mapper keeps no journal that could lose keyframes, and a retained
+// keyframe here is a whole KeyframeData (images, about 1 MB): keep none.
+KeyframeOutboxOptions withoutRetention(KeyframeOutboxOptions options) {
+  options.retained = 0;
+  return options;
+}
+
 }  // namespace
 
 class SlamSystem::Impl {
@@ -42,7 +49,7 @@ class SlamSystem::Impl {
        const LinkOptions& link)
       : options_(options), mode_(*parseSlamMode(options.mode)), deterministic_(deterministic),
         tracker_(camera, options.tracker, mode_, kMapId),
-        tracker_sync_(kMapId, options.sync.outbox),
+        tracker_sync_(kMapId, withoutRetention(options.sync.outbox)),
         mapper_(camera, options.mapper, mode_),
         mapper_sync_(&mapper_, mapperSyncOptions(options.sync.mapper, link)),
         keyframe_link_(link), map_link_(withSeed(link, 2)), receipt_link_(withSeed(link, 3)) {

@@ -79,6 +79,9 @@ struct MapReceipt {
   int64_t newest_version_seen = 0;  // newest version of this map received, applied or not
   int64_t keyframes_created = 0;    // keyframe ids below this exist on the tracker
   int64_t keyframes_unacked = 0;    // of those, not yet acknowledged
+  // The oldest keyframe id the tracker can still send (unacknowledged, or acknowledged and
+  // retained); a mapper lacking keyframes below it skips them, since none will come.
+  int64_t keyframes_sendable_from = 0;
 };
 
 }  // namespace rgbdslam

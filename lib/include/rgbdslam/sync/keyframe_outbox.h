@@ -7,8 +7,12 @@
 // 'Message' is what goes on the wire: the encoded keyframe_t in rgbd-tracker (encoding once,
 // re-sending the bytes), the KeyframeData itself in rgbd-slam.
 // Time: 'now_us' from the caller's monotonic clock [us]; the outbox reads no clock itself.
+// Acknowledged keyframes: the newest 'retained' of them are kept too, for a mapper that
+// loses acknowledged keyframes (its journal cut short by a corrupt record): resendFrom()
+// puts them back in line. What is older is gone for good; oldestSendable() tells the mapper
+// (in the receipt) where the tracker can still start, so it skips what nobody can send.
 // Memory: one Message per unacknowledged keyframe (during a link outage it grows by one per
-// keyframe; the mapper's intake bounds nothing here).
+// keyframe; the mapper's intake bounds nothing here), plus 'retained' acknowledged ones.
 // Threads: not thread-safe; one thread calls everything.
 #include <algorithm>
 #include <cstdint>
@@ -24,6 +28,7 @@ struct KeyframeOutboxOptions {
   double resend_period_s = 1.0;      // first re-send of an unacknowledged keyframe after this [s]
   double resend_max_period_s = 4.0;  // the doubling re-send interval grows to this at most [s]
   int resend_max = 2;                // keyframes re-sent at one time at most, oldest first
+  int retained = 64;                 // acknowledged keyframes kept for a mapper that loses them
 };
 
 template <typename Message>
@@ -61,9 +66,30 @@ class KeyframeOutbox {
       const auto it = entries_.find(id);
       if (it == entries_.end()) continue;
       ages_s.push_back((now_us - it->second.first_sent_us) * 1e-6);
+      if (options_.retained > 0) retained_[id] = std::move(it->second.message);
       entries_.erase(it);
     }
+    while (static_cast<int>(retained_.size()) > std::max(options_.retained, 0)) retained_.erase(retained_.begin());
     return ages_s;
+  }
+
+  // The mapper lost the acknowledged keyframes from 'first' on: the retained ones go back in
+  // line, due at once (oldest first, resend_max at a time). Returns how many.
+  int resendFrom(KeyframeId first, int64_t now_us) {
+    int count = 0;
+    for (auto it = retained_.lower_bound(first); it != retained_.end(); it = retained_.erase(it)) {
+      entries_[it->first] = Entry{std::move(it->second), now_us, now_us, options_.resend_period_s / 2, 0};
+      ++count;
+    }
+    return count;
+  }
+
+  // The oldest keyframe this tracker can still send ('none': the caller's next id).
+  KeyframeId oldestSendable(KeyframeId none) const {
+    KeyframeId oldest = none;
+    if (!entries_.empty()) oldest = std::min(oldest, entries_.begin()->first);
+    if (!retained_.empty()) oldest = std::min(oldest, retained_.begin()->first);
+    return oldest;
   }
 
   size_t size() const { return entries_.size(); }
@@ -84,6 +110,7 @@ class KeyframeOutbox {
   };
   KeyframeOutboxOptions options_;
   std::map<KeyframeId, Entry> entries_;  // ordered: oldest first
+  std::map<KeyframeId, Message> retained_;  // acknowledged, newest 'retained'
 };
 
 }  // namespace rgbdslam

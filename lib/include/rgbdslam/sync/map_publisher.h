@@ -12,12 +12,17 @@
 //     the same applied version below the published one (the lost delta was the last): two
 //     receipts, or four while that version is below the last snapshot's (which may still be
 //     on its way).
-//   - A receipt that claims a version this publisher never published is counted and ignored.
+//   - A receipt that claims a version this publisher never published comes from a tracker
+//     that holds versions of a mapper run whose journal was cut short (a corrupt record):
+//     the versions go on after the tracker's, with a snapshot, so that the tracker takes them
+//     (it never goes backwards). A claim further ahead than the tracker itself would accept
+//     (MapFollower's step) is implausible: counted and ignored.
 // Time: 'now_us' from the caller's monotonic clock [us]. Threads: not thread-safe (the
 // caller, MapperSync, serialises).
 #include <optional>
 
 #include "rgbdslam/map/map_diff.h"
+#include "rgbdslam/sync/map_follower.h"
 
 namespace rgbdslam {
 
@@ -31,7 +36,8 @@ enum class ReceiptVerdict {
   kNoted,             // nothing to do
   kSnapshotAsked,     // the next publication is a snapshot
   kForeignMap,        // a receipt for another map
-  kImplausible,       // claims a version never published
+  kCaughtUp,          // claims a version never published: versions go on after it
+  kImplausible,       // claims a version too far ahead to be true
 };
 const char* toString(ReceiptVerdict verdict);
 
@@ -55,6 +61,7 @@ class MapPublisher {
   int64_t version() const { return version_; }
   long snapshotsPublished() const { return snapshots_published_; }
   long snapshotsAsked() const { return snapshots_asked_; }
+  long versionsCaughtUp() const { return versions_caught_up_; }
 
  private:
   bool elapsed(int64_t since_us, int64_t now_us, double period_s) const {
@@ -70,7 +77,7 @@ class MapPublisher {
   bool snapshot_due_ = true, integrated_unpublished_ = false, ack_due_ = false;
   int64_t last_receipt_version_ = -1;  // applied version in the previous receipt
   int same_receipts_ = 0;              // receipts in a row with that version
-  long snapshots_published_ = 0, snapshots_asked_ = 0;
+  long snapshots_published_ = 0, snapshots_asked_ = 0, versions_caught_up_ = 0;
 };
 
 }  // namespace rgbdslam

@@ -11,9 +11,16 @@
 //   refine(now): one Mapper::refine pass unless converged, then publishDue.
 //   publishDue(now): the publisher's next version, journaled before it is returned (a
 //     restarted mapper never re-uses a version).
-//   onReceipt(r): the tracker's receipt (MapPublisher::onReceipt).
+//   onReceipt(r): the tracker's receipt (MapPublisher::onReceipt). When the receipt shows the
+//     tracker can no longer send the keyframe the intake waits for (keyframes_sendable_from
+//     beyond it: the journal lost acknowledged keyframes older than the tracker retains),
+//     the intake skips to where the tracker can start, counting the keyframes skipped: the
+//     map goes on without them rather than wait for ever. A mapper that lost its whole
+//     journal (no map yet) takes the map id from such a receipt when keyframes of that map
+//     wait in its queue.
 //   restore(journal contents): before anything else: re-integrates the journaled keyframes
-//     and continues the versions after the last journaled one (the first is a snapshot).
+//     (ids increasing; gaps are keyframes skipped before) and continues the versions after
+//     the last journaled one (the first is a snapshot).
 // Threads: offer() and onReceipt() may come from one thread (the transport's) while another
 // (the worker) calls integrateNext / refine / publishDue / waitForWork; the mapper and its
 // map belong to the worker. interrupt() is set while the next keyframe waits, so refinement
@@ -95,7 +102,8 @@ class MapperSync {
   struct Counters {
     long queued = 0, duplicates = 0, out_of_order = 0, foreign = 0, dropped_queue_full = 0,
          integrated = 0, refused = 0, restored = 0, journal_errors = 0, maps_published = 0,
-         snapshots_published = 0, snapshots_asked = 0, receipts_implausible = 0;
+         snapshots_published = 0, snapshots_asked = 0, receipts_implausible = 0,
+         versions_caught_up = 0, keyframes_skipped = 0;
   };
   Counters counters() const;
   int64_t mapId() const;
@@ -105,6 +113,7 @@ class MapperSync {
  private:
   bool nextReadyLocked() const { return queue_.count(next_id_) > 0; }
   void dropForeignLocked();
+  void skipUnsendableLocked(const MapReceipt& receipt);
 
   Mapper* mapper_;
   MapperSyncOptions options_;

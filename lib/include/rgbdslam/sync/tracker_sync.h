@@ -5,8 +5,14 @@
 //     (resendsDue) until a map message acknowledges it (KeyframeOutbox).
 //   receive(update, now, apply): a map message. Its acknowledgements count whenever it is of
 //     this map; its content is applied through 'apply' only when MapFollower says so.
+//     An applied message that acknowledges fewer keyframes than the tracker had seen
+//     acknowledged comes from a mapper that lost some (its journal was cut short): the
+//     retained ones are sent again (KeyframeOutbox::resendFrom), and from then on only
+//     messages at least that new acknowledge anything (an older one still on its way speaks
+//     for the mapper before the loss).
 //   receipt(now): what the tracker holds, for the mapper (sent every receipt period).
 // Time: 'now_us' from the caller's monotonic clock [us]. Threads: not thread-safe.
+#include <algorithm>
 #include <vector>
 
 #include "rgbdslam/sync/keyframe_outbox.h"
@@ -18,6 +24,7 @@ struct MapReceiveResult {
   MapVerdict verdict = MapVerdict::kForeignMap;
   bool applied = false;
   bool unknown_keyframes = false;       // applied, but entries named keyframes it lacks
+  int resent_after_loss = 0;            // the mapper lost acknowledged keyframes: sent again
   std::vector<double> ack_latencies_s;  // keyframes newly acknowledged: time since first send
 };
 
@@ -42,7 +49,17 @@ class TrackerSync {
     if (result.verdict == MapVerdict::kForeignMap || result.verdict == MapVerdict::kImplausible) {
       return result;
     }
+    if (update.version < acks_from_version_) return result;
+    const KeyframeId acked_below =
+        update.acked_keyframes.empty() ? 0 : *std::max_element(update.acked_keyframes.begin(), update.acked_keyframes.end()) + 1;
+    if (result.verdict == MapVerdict::kApply && acked_below < acked_below_) {
+      result.resent_after_loss = outbox_.resendFrom(acked_below, now_us);
+      acks_from_version_ = update.version;
+      acked_below_ = acked_below;
+      ++mapper_losses_;
+    }
     result.ack_latencies_s = outbox_.acknowledge(update.acked_keyframes, now_us);
+    acked_below_ = std::max(acked_below_, acked_below);
     if (result.verdict != MapVerdict::kApply) return result;
     result.unknown_keyframes = !apply(update);
     follower_.applied(update);
@@ -51,8 +68,12 @@ class TrackerSync {
   }
 
   MapReceipt receipt(int64_t utime) const {
-    return follower_.receipt(utime, keyframes_created_, static_cast<int64_t>(outbox_.size()));
+    MapReceipt r = follower_.receipt(utime, keyframes_created_, static_cast<int64_t>(outbox_.size()));
+    r.keyframes_sendable_from = outbox_.oldestSendable(keyframes_created_);
+    return r;
   }
+  // Times a mapper was seen to have lost acknowledged keyframes.
+  long mapperLosses() const { return mapper_losses_; }
   const KeyframeOutbox<Message>& outbox() const { return outbox_; }
   const MapFollower& follower() const { return follower_; }
 
@@ -60,6 +81,9 @@ class TrackerSync {
   KeyframeOutbox<Message> outbox_;
   MapFollower follower_;
   int64_t keyframes_created_ = 0;
+  KeyframeId acked_below_ = 0;      // every keyframe below was acknowledged
+  int64_t acks_from_version_ = 0;   // messages older than this acknowledge nothing
+  long mapper_losses_ = 0;
 };
 
 }  // namespace rgbdslam
