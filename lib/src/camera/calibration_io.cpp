@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <opencv2/core.hpp>
 #include <optional>
 
 #include "rgbdslam/util/yaml_file.h"
@@ -13,25 +12,26 @@ namespace rgbdslam {
 namespace {
 
 struct KeyReader {
-  const cv::FileNode& fs;  // the file's top level (a mapping)
+  const YamlNode& fs;  // the file's top level (a mapping)
   const std::string& path;
   std::string error;
 
-  bool has(const std::string& key) const { return !fs[key].empty() && !fs[key].isNone(); }
+  bool has(const std::string& key) const {
+    const YamlNode* node = fs.find(key);
+    return node && !(node->isScalar() && !node->quoted && (node->scalar.empty() || node->scalar == "~" || node->scalar == "null"));
+  }
 
   // Reads a required number from the first of 'keys' present.
   double number(std::initializer_list<const char*> keys, bool required = true,
                 double fallback = 0.0) {
     for (const char* key : keys) {
       if (!has(key)) continue;
-      const cv::FileNode node = fs[key];
-      if (!node.isReal() && !node.isInt()) {
-        fail(std::string("key '") + key + "' is not a number");
+      const auto value = fs.find(key)->number();
+      if (!value) {
+        fail(std::string("key '") + key + "' " + value.error());
         return fallback;
       }
-      const double value = static_cast<double>(node);
-      if (!std::isfinite(value)) fail(std::string("key '") + key + "' is not finite");
-      return value;
+      return *value;
     }
     if (required) fail(std::string("missing key '") + *keys.begin() + "'");
     return fallback;
@@ -63,15 +63,16 @@ struct KeyReader {
 
 void readDistortion(KeyReader& reader, PinholeCamera& camera) {
   if (reader.has("distortion")) {
-    const cv::FileNode node = reader.fs["distortion"];
+    const YamlNode& node = *reader.fs.find("distortion");
     std::vector<double> d;
-    if (node.isSeq()) {
-      for (const auto& item : node) {
-        if (!item.isReal() && !item.isInt()) {
+    if (node.isSequence()) {
+      for (const YamlNode& item : node.items) {
+        const auto value = item.number();
+        if (!value) {
           reader.fail("key 'distortion' must be a list of numbers");
           return;
         }
-        d.push_back(static_cast<double>(item));
+        d.push_back(*value);
       }
     }
     if (d.size() != 4 && d.size() != 5) {
@@ -89,11 +90,11 @@ void readDistortion(KeyReader& reader, PinholeCamera& camera) {
   camera.k3 = reader.number({"Camera.k3"}, false);
 }
 
-Expected<PinholeCamera> readCamera(const cv::FileNode& fs, const std::string& path) {
+Expected<PinholeCamera> readCamera(const YamlNode& fs, const std::string& path) {
   KeyReader reader{fs, path, {}};
   PinholeCamera camera;
-  if (reader.has("name") && fs["name"].isString()) {
-    camera.name = static_cast<std::string>(fs["name"]);
+  if (reader.has("name") && fs.find("name")->isScalar()) {
+    camera.name = fs.find("name")->scalar;
   } else {
     camera.name = std::filesystem::path(path).stem().string();
   }
@@ -120,7 +121,7 @@ Expected<PinholeCamera> readCamera(const cv::FileNode& fs, const std::string& pa
 Expected<PinholeCamera> loadCamera(const std::string& path) {
   std::optional<Expected<PinholeCamera>> camera;
   const Status read = readYamlMapping(path, "camera", "keys such as fx: ..., image_width: ...",
-                                      [&](const cv::FileNode& root) {
+                                      [&](const YamlNode& root) {
                                         camera = readCamera(root, path);
                                         return *camera ? Status{} : Status(Error{camera->error()});
                                       });

@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <opencv2/core.hpp>
 #include <set>
 #include <sstream>
 
@@ -30,19 +29,6 @@ Expected<double> parseDouble(const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || errno != 0 || !std::isfinite(v)) return Error{"'" + text + "' is not a number"};
   return v;
-}
-
-// Text of a scalar node (numbers formatted back, strings as they are).
-Expected<std::string> nodeText(const cv::FileNode& node) {
-  if (node.isInt()) return std::to_string(static_cast<int>(node));
-  if (node.isReal()) {
-    std::ostringstream out;
-    out.precision(17);
-    out << static_cast<double>(node);
-    return out.str();
-  }
-  if (node.isString()) return static_cast<std::string>(node);
-  return Error{"is not a scalar"};
 }
 
 }  // namespace
@@ -182,22 +168,22 @@ OptionRegistry::Entry* OptionRegistry::find(const std::string& section, const st
 
 Status OptionRegistry::load(const std::string& path) {
   return readYamlMapping(path, "configuration", "sections such as tracker: ...",
-                         [&](const cv::FileNode& root) { return loadSections(root, path); });
+                         [&](const YamlNode& root) { return loadSections(root, path); });
 }
 
-Status OptionRegistry::loadSections(const cv::FileNode& root, const std::string& path) {
+Status OptionRegistry::loadSections(const YamlNode& root, const std::string& path) {
   std::set<std::string> sections;
   for (const auto& e : entries_) sections.insert(e.section);
-  for (const cv::FileNode& section : root) {
-    const std::string section_name = section.name();
-    if (!sections.count(section_name)) return Error{path + ": unknown section '" + section_name + "'"};
-    if (!section.isMap()) return Error{path + ": section '" + section_name + "' must be a mapping"};
-    for (const cv::FileNode& node : section) {
-      Entry* entry = find(section_name, node.name());
-      if (!entry) return Error{path + ": unknown key '" + section_name + "." + node.name() + "'"};
-      auto text = nodeText(node);
-      if (!text) return Error{path + ": " + section_name + "." + node.name() + " " + text.error()};
-      if (Status s = entry->parse(*text); !s) return Error{path + ": " + s.error()};
+  for (const auto& [section_name, section] : root.entries) {
+    const std::string at = path + ":" + std::to_string(section.line) + ": ";
+    if (!sections.count(section_name)) return Error{at + "unknown section '" + section_name + "'"};
+    if (!section.isMapping()) return Error{at + "section '" + section_name + "' must be a mapping"};
+    for (const auto& [key, node] : section.entries) {
+      const std::string line = path + ":" + std::to_string(node.line) + ": ";
+      Entry* entry = find(section_name, key);
+      if (!entry) return Error{line + "unknown key '" + section_name + "." + key + "'"};
+      if (!node.isScalar()) return Error{line + section_name + "." + key + " is not a scalar"};
+      if (Status s = entry->parse(node.scalar); !s) return Error{line + s.error()};
     }
   }
   return {};

@@ -1,5 +1,5 @@
 #pragma once
-// Loads a camera calibration from an OpenCV FileStorage YAML file.
+// Loads a camera calibration from a YAML file (util/yaml_file.h; OpenCV's "%YAML:1.0" layout).
 // Accepted layouts (see config/cameras/README.md):
 //  - the project's own keys: name, image_width, image_height, fx, fy, cx, cy,
 //    distortion (k1 k2 p1 p2 k3, optional, default zeros), depth_factor;

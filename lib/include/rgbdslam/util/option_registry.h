@@ -1,6 +1,6 @@
 #pragma once
 // One loader for every component's options. Each options struct (defaults in-class) binds
-// its fields here with a unit and a meaning; load() reads a YAML file (OpenCV FileStorage)
+// its fields here with a unit and a meaning; load() reads a YAML file (util/yaml_file.h)
 // with one mapping per section and rejects unknown sections, unknown keys and ill-typed or
 // out-of-range values, naming the key and the file (also a file whose top level is not a
 // mapping); describe() prints the effective configuration. Options that depend on each other
@@ -17,10 +17,7 @@
 #include <vector>
 
 #include "rgbdslam/util/expected.h"
-
-namespace cv {
-class FileNode;
-}
+#include "rgbdslam/util/yaml_file.h"
 
 namespace rgbdslam {
 
@@ -98,7 +95,7 @@ class OptionRegistry {
                   const std::string& help);
   std::vector<std::string> sectionsInOrder() const;
   const Entry* find(const std::string& section, const std::string& key) const;
-  Status loadSections(const cv::FileNode& root, const std::string& path);
+  Status loadSections(const YamlNode& root, const std::string& path);
   std::string valuesIn(const std::string& text) const;
   std::vector<Entry> entries_;
   std::vector<Rule> rules_;
