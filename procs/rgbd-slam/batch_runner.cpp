@@ -133,7 +133,11 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
       std::cerr << "\nrgbd-slam: error: frame " << input.frame.seq << ": " << last.error << "\n";
       ++bad_frames_;
     }
-    if (hasPose(last.status)) trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
+    if (last.status != TrackResult::Status::kBadFrame) ++state_frames_[last.pose.state];
+    if (hasPose(last.status)) {
+      trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
+      pose_states_.push_back(last.pose.state);
+    }
     if (const std::string event = loss_.update(last); !event.empty()) {
       std::cerr << "\nrgbd-slam: " << event << "\n";
     }
@@ -155,6 +159,11 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
               stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.maps_stale,
               stats.snapshots, stats.link_lost);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
+  for (TrackingState state : {TrackingState::kInitialising, TrackingState::kTracking, TrackingState::kDodgy,
+                              TrackingState::kLost, TrackingState::kRelocalised}) {
+    const auto it = state_frames_.find(state);
+    std::printf("frames_%s %ld\n", toString(state), it == state_frames_.end() ? 0L : it->second);
+  }
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: peak resident set size [kB] on Linux
@@ -172,6 +181,12 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     return;
   }
   std::printf("%s", toKeyValueText(*result).c_str());
+  // The jumps a flight controller would have followed: reported as tracking (good).
+  long jumps_tracking = 0;
+  for (size_t k : result->jump_pairs) {
+    if (pose_states_[result->pairs[k].est_index] == TrackingState::kTracking) ++jumps_tracking;
+  }
+  std::printf("jumps_while_tracking %ld\n", jumps_tracking);
   // The paper's Table I: where the run ends, relative to where it started (as slam-eval).
   if (const auto end = endPointError(*groundtruth_, trajectory, eval.max_dt_s)) {
     std::printf("%s", toKeyValueText(*end).c_str());

@@ -2,6 +2,7 @@
 // The rgbd-slam loop: read frames, run the SLAM system, write the trajectory, show
 // progress, and at the end evaluate against ground truth when there is one.
 #include <atomic>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -48,6 +49,8 @@ class BatchRunner {
   std::optional<Trajectory> groundtruth_;
   std::unique_ptr<SlamSystem> slam_;
   std::vector<double> track_ms_;
+  std::vector<TrackingState> pose_states_;       // the state of each trajectory pose
+  std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long bad_frames_ = 0;
   LossReport loss_;  // logged even with --quiet: losing tracking is an event, not progress
 };

@@ -114,6 +114,7 @@ void TrackerNode::trackFrame(const Received& received) {
   track_ms_.add(result.track_ms);
   if (result.status == TrackResult::Status::kLost) ++counters_.lost;
   if (hasPose(result.status)) ++counters_.poses;
+  if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];
   state_ = result.pose.state;
   result.pose.utime = frame->utime;
   result.pose.seq = frame->seq;
@@ -228,6 +229,9 @@ void TrackerNode::publishStatus() {
                      {"frames_skipped", c.frames_skipped},
                      {"poses", c.poses},
                      {"lost_frames", c.lost},
+                     {"frames_tracking", state_frames_[static_cast<size_t>(TrackingState::kTracking)]},
+                     {"frames_dodgy", state_frames_[static_cast<size_t>(TrackingState::kDodgy)]},
+                     {"frames_relocalised", state_frames_[static_cast<size_t>(TrackingState::kRelocalised)]},
                      {"lost_episodes", loss_.episodes()},
                      {"relocalisations", loss_.relocalisations()},
                      {"bad_frames", c.bad_frames},
@@ -260,6 +264,10 @@ void TrackerNode::printSummary() const {
   // Key-value lines on stdout (for scripts), as rgbd-slam prints its summary.
   std::printf("frames_skipped %ld\n", c.frames_skipped);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
+  for (TrackingState state : {TrackingState::kInitialising, TrackingState::kTracking, TrackingState::kDodgy,
+                              TrackingState::kLost, TrackingState::kRelocalised}) {
+    std::printf("frames_%s %ld\n", toString(state), state_frames_[static_cast<size_t>(state)]);
+  }
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",

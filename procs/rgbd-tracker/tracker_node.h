@@ -15,6 +15,7 @@
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
 //   SLAM_STATUS (link) every status_period_s: state, counters, timings, queue lengths.
 // Two LCM instances when the link has its own URL (frames never cross the radio link).
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
@@ -93,6 +94,7 @@ class TrackerNode {
   };
   Counters counters_;
   LossReport loss_;  // logs losing tracking and relocalising, one line each
+  std::array<long, 5> state_frames_{};  // frames per TrackingState (by its value)
 };
 
 }  // namespace rgbdslam

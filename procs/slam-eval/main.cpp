@@ -51,7 +51,9 @@ rgbdslam::CommandLine makeCommandLine() {
       "'key value' lines (ate_rmse_m, ate_mean_m, ate_median_m, ate_max_m, scale,\n"
       "rpe_per_s_trans_rmse_m, rpe_per_s_rot_rmse_deg, rpe_per_m_*, num_estimate, "
       "num_groundtruth,\n"
-      "num_associated, coverage, alignment). Works on files only: --lcm-url is accepted like\n"
+      "num_associated, coverage, alignment; the frame-to-frame error between consecutive posed\n"
+      "frames after the alignment, f2f_median_m, f2f_max_m and its time f2f_max_t_s, and 'jumps',\n"
+      "how many exceed --jump-threshold-m: the figure a flight controller feels). Works on files only: --lcm-url is accepted like\n"
       "in every process, and nothing is sent or received. Exit codes: 0 success, 1 evaluation or output failed, 2 bad arguments or\n"
       "input files.");
   cli.positional("GROUNDTRUTH", "ground-truth trajectory (TUM format)");
@@ -75,6 +77,8 @@ rgbdslam::CommandLine makeCommandLine() {
              formatDefault(defaults.rpe_delta_s));
   cli.option("rpe-delta-m", "M", "travelled ground-truth distance [m] of the per-metre RPE",
              formatDefault(defaults.rpe_delta_m));
+  cli.option("jump-threshold-m", "M", "frame-to-frame errors above this count as jumps (key 'jumps') [m]",
+             formatDefault(defaults.jump_threshold_m));
   cli.option("frames", "N",
              "number of input frames, for coverage = num_associated / N "
              "(default: unknown, coverage null)");
@@ -106,7 +110,8 @@ Expected<CliOptions> readOptions(const rgbdslam::CommandLine& cli) {
   options.eval.similarity = cli.has("similarity");
   for (const auto& [name, field] : {std::pair{"max-dt", &options.eval.max_dt_s},
                                     std::pair{"rpe-delta-s", &options.eval.rpe_delta_s},
-                                    std::pair{"rpe-delta-m", &options.eval.rpe_delta_m}}) {
+                                    std::pair{"rpe-delta-m", &options.eval.rpe_delta_m},
+                                    std::pair{"jump-threshold-m", &options.eval.jump_threshold_m}}) {
     auto value = positiveDouble(cli, name);
     if (!value) return Error{value.error()};
     *field = *value;

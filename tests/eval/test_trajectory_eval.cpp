@@ -82,6 +82,36 @@ TEST(TrajectoryEval, RigidlyMovedTrajectoryHasZeroAteAndRecoversTransform) {
   EXPECT_GT(result->rpe_per_m.trans_m.count, 400u);
 }
 
+// Issue 12: the figure a flight controller feels. A 5 cm jump held for a dozen frames, then
+// undone: two frame-to-frame errors of 5 cm (there and back), found at the right time,
+// although the ATE hardly shows them.
+TEST(TrajectoryEval, FrameToFrameErrorFindsAJumpAndCountsThoseAboveTheThreshold) {
+  const Trajectory groundtruth = straightGroundTruth();
+  Trajectory estimate = groundtruth;
+  for (size_t k = 200; k < 212; ++k) {
+    estimate[k].T_w_c = SE3(estimate[k].T_w_c.rotation(), estimate[k].T_w_c.translation() + Vec3(0.05, 0, 0));
+  }
+  const auto result = evaluateTrajectory(groundtruth, inOtherWorld(estimate, kT_est_gt), EvalOptions{});
+  ASSERT_TRUE(result.ok()) << result.error();
+  EXPECT_EQ(result->jumps, 2u);
+  ASSERT_EQ(result->jump_pairs.size(), 2u);
+  EXPECT_EQ(result->pairs[result->jump_pairs[0]].est_index, 200u);
+  EXPECT_EQ(result->pairs[result->jump_pairs[1]].est_index, 212u);
+  EXPECT_NEAR(result->frame_to_frame_m.max, 0.05, 0.002);
+  EXPECT_LT(result->frame_to_frame_m.median, 1e-3);
+  const double t_jump = groundtruth[200].t, t_back = groundtruth[212].t;
+  EXPECT_TRUE(std::abs(result->worst_jump_t_s - t_jump) < 1e-6 || std::abs(result->worst_jump_t_s - t_back) < 1e-6)
+      << result->worst_jump_t_s - kStartTime_s;
+  EvalOptions loose;
+  loose.jump_threshold_m = 0.06;
+  EXPECT_EQ(evaluateTrajectory(groundtruth, estimate, loose)->jumps, 0u);
+  const std::string text = toKeyValueText(*result);
+  EXPECT_NE(text.find("jumps 2\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("f2f_max_m 0.05"), std::string::npos) << text;
+  loose.jump_threshold_m = 0.0;
+  EXPECT_FALSE(evaluateTrajectory(groundtruth, estimate, loose));
+}
+
 TEST(TrajectoryEval, IsotropicNoiseOfOneCentimetreGivesThatAte) {
   const Trajectory groundtruth = helixGroundTruth();
   Trajectory estimate = groundtruth;

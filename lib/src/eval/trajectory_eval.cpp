@@ -84,6 +84,7 @@ Status validate(const EvalOptions& options) {
   if (!(options.rpe_delta_s > 0.0)) return Error{"rpe_delta_s must be positive"};
   if (!(options.rpe_delta_m > 0.0)) return Error{"rpe_delta_m must be positive"};
   if (options.num_frames && *options.num_frames == 0) return Error{"num_frames must be positive"};
+  if (!(options.jump_threshold_m > 0.0)) return Error{"jump_threshold_m must be positive"};
   return {};
 }
 
@@ -135,6 +136,11 @@ Fields summaryFields(const EvalResult& r) {
       {"max_dt_s", r.options.max_dt_s},
       {"rpe_delta_s", r.options.rpe_delta_s},
       {"rpe_delta_m", r.options.rpe_delta_m},
+      {"f2f_median_m", r.frame_to_frame_m.median},
+      {"f2f_max_m", r.frame_to_frame_m.max},
+      {"f2f_max_t_s", r.worst_jump_t_s},
+      {"jumps", r.jumps},
+      {"jump_threshold_m", r.options.jump_threshold_m},
   };
 }
 
@@ -260,6 +266,24 @@ Expected<EvalResult> evaluateTrajectory(const Trajectory& groundtruth, const Tra
     ate_errors.push_back((p_gt[k] - result.S_gt_est * p_est[k]).norm());
   }
   result.ate_m = computeErrorStats(std::move(ate_errors));
+
+  // Frame to frame, in the ground truth's world: the aligned step against the true step.
+  std::vector<double> steps;
+  double worst = -1.0;
+  for (size_t k = 1; k < p_est.size(); ++k) {
+    const Vec3 step_est = result.S_gt_est * p_est[k] - result.S_gt_est * p_est[k - 1];
+    const double error = (step_est - (p_gt[k] - p_gt[k - 1])).norm();
+    steps.push_back(error);
+    if (error > options.jump_threshold_m) {
+      ++result.jumps;
+      result.jump_pairs.push_back(k);
+    }
+    if (error > worst) {
+      worst = error;
+      result.worst_jump_t_s = estimate[result.pairs[k].est_index].t;
+    }
+  }
+  result.frame_to_frame_m = computeErrorStats(std::move(steps));
 
   // RPE, keyed by ground-truth time and by travelled ground-truth distance.
   const std::vector<double> distance = travelledDistance(groundtruth);

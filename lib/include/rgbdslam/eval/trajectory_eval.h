@@ -1,7 +1,10 @@
 #pragma once
 // Trajectory evaluation against ground truth, as in the TUM RGB-D benchmark: absolute
 // trajectory error (ATE) after aligning the estimate to the ground truth, and relative pose
-// error (RPE) over a fixed time (1 s) and a fixed travelled distance (1 m).
+// error (RPE) over a fixed time (1 s) and a fixed travelled distance (1 m). Also the
+// frame-to-frame error, the figure a flight controller feels: between consecutive posed
+// frames, |S(p_est,j) - S(p_est,i) - (p_gt,j - p_gt,i)| after the alignment S, its worst
+// value and how many exceed jump_threshold_m (a jump).
 //
 // Call order: evaluateTrajectory(groundtruth, estimate, options) -> EvalResult, then any of
 // toJson / toKeyValueText / writeTrajectoryPlot on the result.
@@ -27,6 +30,7 @@ struct EvalOptions {
   double rpe_delta_s = 1.0;          // [s] time step of the per-second RPE (ground-truth time)
   double rpe_delta_m = 1.0;          // [m] travelled ground-truth distance of the per-metre RPE
   std::optional<size_t> num_frames;  // frames given to the tracker, for coverage; unknown if empty
+  double jump_threshold_m = 0.02;    // [m] frame-to-frame errors above this are counted as jumps
 };
 
 // Summary of a set of non-negative errors. All zero when count == 0.
@@ -75,6 +79,10 @@ struct EvalResult {
   ErrorStats ate_m;                // |p_gt - S_gt_est * p_est| over associated pairs [m]
   RpeResult rpe_per_s;             // delta = options.rpe_delta_s in ground-truth time
   RpeResult rpe_per_m;             // delta = options.rpe_delta_m of travelled ground truth
+  ErrorStats frame_to_frame_m;     // between consecutive associated poses, after alignment [m]
+  double worst_jump_t_s = 0.0;     // estimate time of the later pose of the worst one [s]
+  size_t jumps = 0;                // frame-to-frame errors above options.jump_threshold_m
+  std::vector<size_t> jump_pairs;  // each jump's later pose, as an index into 'pairs' 
   std::vector<PosePair> pairs;     // the association, sorted by estimate time
 };
 
@@ -105,7 +113,8 @@ std::string toKeyValueText(const EndPointError& error);
 // ate_min_m, ate_max_m, scale, rpe_per_s_* / rpe_per_m_* (trans_rmse_m, rot_rmse_deg, pairs;
 // null when no pair spans the delta), num_estimate, num_groundtruth, num_associated,
 // num_frames and coverage (null when unknown), alignment ("rigid" / "similarity"), max_dt_s,
-// rpe_delta_s, rpe_delta_m, and T_gt_est (translation_m, quaternion_xyzw).
+// rpe_delta_s, rpe_delta_m, f2f_median_m, f2f_max_m, f2f_max_t_s, jumps, jump_threshold_m,
+// and T_gt_est (translation_m, quaternion_xyzw).
 std::string toJson(const EvalResult& result);
 // The same keys as "key value" lines (values %.6f, counts as integers, "null" when unknown).
 std::string toKeyValueText(const EvalResult& result);
