@@ -308,6 +308,23 @@ TEST(SyncProtocol, WholeJournalLostTheMapGoesOnFromTheKeyframesThatStillCome) {
   EXPECT_TRUE(rig.tracker.outbox().empty());
 }
 
+// Found by the fail-before check: with the default retention the tracker still held
+// keyframe 0, so nothing was skipped, and a mapper without a map published nothing that
+// would make the tracker send again: it waited for ever.
+TEST(SyncProtocol, WholeJournalLostTheTrackerSendsItsRetainedKeyframesAgain) {
+  Rig rig(link(0, 50, 1), link(0, 50, 2));
+  rig.fly(6, 0.5);
+  ASSERT_TRUE(rig.settle(10));
+  rig.restartMapperOnCutJournal(0);
+  rig.fly(3, 0.5);
+  ASSERT_TRUE(rig.settle(30));
+  rig.expectConsistent();  // all 9 keyframes
+  EXPECT_EQ(rig.sync->counters().keyframes_skipped, 0);
+  EXPECT_EQ(rig.sync->counters().integrated, 9);
+  EXPECT_EQ(rig.tracker.mapperLosses(), 1);
+  EXPECT_EQ(rig.verdicts[MapVerdict::kStale], 0) << "versions went on after the tracker's";
+}
+
 TEST(SyncProtocol, DuplicatedAndReorderedKeyframesAreIntegratedOnceInOrder) {
   LinkOptions up = link(0, 20, 5);
   up.jitter_ms = 1500;  // keyframes every 0.3 s arrive out of order

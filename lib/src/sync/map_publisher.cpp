@@ -28,6 +28,12 @@ void MapPublisher::start(int64_t map_id, int64_t last_version) {
   same_receipts_ = 0;
 }
 
+void MapPublisher::startAfterLoss(int64_t map_id, int64_t tracker_version) {
+  start(map_id, tracker_version);
+  snapshot_due_ = false;
+  ack_due_ = true;
+}
+
 void MapPublisher::note(const MapChanges& changes, bool integrated) {
   pending_.merge(changes);
   integrated_unpublished_ = integrated_unpublished_ || integrated;

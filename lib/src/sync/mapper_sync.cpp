@@ -81,24 +81,29 @@ ReceiptVerdict MapperSync::onReceipt(const MapReceipt& receipt) {
 // receipt alone skips nothing.
 void MapperSync::skipUnsendableLocked(const MapReceipt& receipt) {
   const KeyframeId from = receipt.keyframes_sendable_from;
-  if (receipt.map_id <= 0 || from <= next_id_ || from > receipt.keyframes_created) return;
-  if (queue_.count(next_id_)) return;
+  if (receipt.map_id <= 0 || from > receipt.keyframes_created || queue_.count(next_id_)) return;
+  if (map_id_ == 0 && receipt.keyframes_created == 0) return;
+  if (map_id_ != 0 && from <= next_id_) return;
   KeyframeId to = from;
   if (map_id_ == receipt.map_id) {
     if (!queue_.count(from)) return;  // the tracker sends it (again): wait for it
   } else if (map_id_ == 0) {
-    // The whole journal is gone. The oldest keyframe of that map waiting here is where the
-    // map starts again (the tracker has no map message that would make it re-send older
-    // retained ones); versions go on after the tracker's.
+    // The whole journal is gone; a keyframe of that map waiting here vouches for the receipt.
     const auto it = std::find_if(queue_.lower_bound(from), queue_.end(), [&](const auto& entry) {
       return entry.second.keyframe.map_id == receipt.map_id;
     });
-    const int64_t claimed = std::max(receipt.applied_version, receipt.newest_version_seen);
-    if (it == queue_.end() || claimed < 0 || claimed > MapFollower::kDefaultMaxVersionStep) return;
-    to = it->first;
+    if (it == queue_.end() || receipt.applied_version > MapFollower::kDefaultMaxVersionStep) return;
     map_id_ = receipt.map_id;
-    publisher_.start(map_id_, claimed);
     dropForeignLocked();
+    if (from == 0) {
+      // The tracker still holds keyframe 0: an empty delta tells it to send its keyframes again.
+      publisher_.startAfterLoss(map_id_, receipt.applied_version);
+      return;
+    }
+    // Nobody can send the keyframes below 'from': the map starts again at the oldest
+    // keyframe of that map waiting here; versions go on after the tracker's.
+    to = it->first;
+    publisher_.start(map_id_, std::max(receipt.applied_version, receipt.newest_version_seen));
   } else {
     return;
   }

@@ -46,6 +46,11 @@ class MapPublisher {
   explicit MapPublisher(const MapPublisherOptions& options = {});
   // Publishes map 'map_id' from version last_version + 1 on; the first is a snapshot.
   void start(int64_t map_id, int64_t last_version);
+  // A mapper that lost its whole journal and holds nothing yet takes over the tracker's map
+  // at the tracker's version: its first publication is an empty delta (no snapshot that
+  // would empty the tracker's replica), which acknowledges no keyframe, so the tracker sends
+  // again the acknowledged keyframes it retains (TrackerSync).
+  void startAfterLoss(int64_t map_id, int64_t tracker_version);
   // The mapper's changes since the last call; 'integrated': they include a new keyframe.
   void note(const MapChanges& changes, bool integrated);
   // A duplicate keyframe arrived (its acknowledgement was probably lost): acknowledge again
