@@ -12,8 +12,9 @@ std::string LossReport::update(const TrackResult& result) {
     if (lost_since_seq_ < 0) {
       lost_since_seq_ = seq;
       ++episodes_;
-      std::snprintf(line, sizeof(line), "frame %ld: tracking lost (%d points found, quality %.2f); relocalising",
-                    seq, result.pose.points_tracked, result.pose.quality);
+      std::snprintf(line, sizeof(line), "frame %ld: tracking lost (%s; %d points found, quality %.2f); relocalising",
+                    seq, result.lost_reason.empty() ? "no pose" : result.lost_reason.c_str(),
+                    result.pose.points_tracked, result.pose.quality);
     }
     ++lost_run_;
   } else if (result.status == Status::kRelocalised) {

@@ -134,6 +134,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
       ++bad_frames_;
     }
     if (last.status != TrackResult::Status::kBadFrame) ++state_frames_[last.pose.state];
+    inconsistent_frames_ += last.inconsistent;
     if (hasPose(last.status)) {
       trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
       pose_states_.push_back(last.pose.state);
@@ -164,6 +165,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     const auto it = state_frames_.find(state);
     std::printf("frames_%s %ld\n", toString(state), it == state_frames_.end() ? 0L : it->second);
   }
+  std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: peak resident set size [kB] on Linux

@@ -115,6 +115,7 @@ void TrackerNode::trackFrame(const Received& received) {
   if (result.status == TrackResult::Status::kLost) ++counters_.lost;
   if (hasPose(result.status)) ++counters_.poses;
   if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];
+  counters_.inconsistent += result.inconsistent;
   state_ = result.pose.state;
   result.pose.utime = frame->utime;
   result.pose.seq = frame->seq;
@@ -232,6 +233,7 @@ void TrackerNode::publishStatus() {
                      {"frames_tracking", state_frames_[static_cast<size_t>(TrackingState::kTracking)]},
                      {"frames_dodgy", state_frames_[static_cast<size_t>(TrackingState::kDodgy)]},
                      {"frames_relocalised", state_frames_[static_cast<size_t>(TrackingState::kRelocalised)]},
+                     {"frames_inconsistent", c.inconsistent},
                      {"lost_episodes", loss_.episodes()},
                      {"relocalisations", loss_.relocalisations()},
                      {"bad_frames", c.bad_frames},
@@ -268,6 +270,7 @@ void TrackerNode::printSummary() const {
                               TrackingState::kLost, TrackingState::kRelocalised}) {
     std::printf("frames_%s %ld\n", toString(state), state_frames_[static_cast<size_t>(state)]);
   }
+  std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",

@@ -215,6 +215,35 @@ TEST(Tracker, RecoversFromAJump) {
   EXPECT_LE(first_good, 253);
 }
 
+// Issue 12: a pose the depth image contradicts is not reported as tracked. Frame 151's depth
+// says every surface is 40 % farther than the map puts it (the walls are not where the pose
+// puts them): the frame is lost with the reason, makes no keyframe, and the next frame
+// (true depth) is posed again. Without the check the same frame is reported as tracked.
+TEST(Tracker, APoseTheDepthImageContradictsIsLostWithTheReason) {
+  RgbdFrame far = roomFrame(151);
+  far.depth = roomFrame(151).depth * 1.4;  // a new buffer: frames are shared
+  for (bool check : {true, false}) {
+    TrackerOptions options;
+    options.integrity.enabled = check;
+    Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
+    ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+    const TrackResult result = tracker.track(far);
+    if (!check) {
+      EXPECT_EQ(result.status, Status::kTracked) << "the 2-D tracker alone is satisfied";
+      EXPECT_FALSE(result.inconsistent);
+      continue;
+    }
+    EXPECT_EQ(result.status, Status::kLost);
+    EXPECT_TRUE(result.inconsistent);
+    EXPECT_FALSE(result.new_keyframe);
+    EXPECT_NE(result.lost_reason.find("depth disagrees with the pose"), std::string::npos) << result.lost_reason;
+    const TrackResult next = tracker.track(roomFrame(152));
+    ASSERT_TRUE(hasPose(next.status)) << static_cast<int>(next.status);
+    EXPECT_FALSE(next.inconsistent);
+    EXPECT_LT(positionError(next.pose.T_w_c, 152), 0.01);
+  }
+}
+
 // Frames dropped while the camera is covered: lost is reported, then the relocaliser finds
 // the pose at the new place.
 TEST(Tracker, RelocalisesAfterAJumpWhileLost) {

@@ -1,4 +1,5 @@
 #include "rgbdslam/tracking/tracker.h"
+#include "rgbdslam/tracking/depth_integrity.h"
 
 #include <algorithm>
 #include <chrono>
@@ -118,6 +119,14 @@ class Tracker::Impl {
                            std::vector<Measurement> measurements);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
   double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
+  // The integrity check (depth_integrity.h) of an attempt's pose; consistent when the
+  // check is off, in mono, or without a depth image.
+  DepthIntegrity integrityOf(const Attempt& attempt, const RgbdFrame& frame);
+  // An attempt the check refused is tracked again, fine stage only, from the prediction and
+  // from the last good pose; the first that passes both checks is returned.
+  std::optional<Attempt> retryConsistent(const SE3& predicted, const RgbdFrame& frame);
+  TrackResult lostResult(const Attempt& attempt, std::string reason, bool inconsistent);
+  std::string lossReason(const Attempt& attempt) const;
   // The pose fit's options: depth residuals only where the mode tracks with depth.
   static PoseOptimizerOptions poseOptions(const TrackerOptions& options, SlamMode mode) {
     PoseOptimizerOptions pose = options.pose;
@@ -142,6 +151,12 @@ class Tracker::Impl {
   int frames_since_keyframe_ = 0;
   KeyframeId next_keyframe_id_ = 0;
   double last_quality_ = 0.0;  // of the last accepted frame (0 after loss and reset)
+  bool frame_inconsistent_ = false;  // this frame's first pose was refused by the check
+  std::vector<Vec3> integrity_points_;  // scratch: the points the check projects...
+  std::vector<PointSlot*> integrity_slots_;  // ...their slots
+  std::vector<DepthVerdict> integrity_verdicts_;
+  // A point's depth record counts after this many checks at accepted poses.
+  static constexpr int kDepthRecordMin = 3;
 
   // Per-frame buffers, reused.
   cv::Mat grey_;
@@ -179,12 +194,14 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
     return result;
   }
   prepareFrame(frame);
+  frame_inconsistent_ = false;
   TrackResult tracked;
   if (replica_.map().numKeyframes() == 0) tracked = initialise(frame);
   else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
   else tracked = trackNormally(frame);
   std::swap(previous_sbi_, sbi_);
   have_previous_sbi_ = true;
+  tracked.inconsistent = frame_inconsistent_;
   return tracked;
 }
 
@@ -274,17 +291,12 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
     attempt = betterOf(attempt, predicted, frame, Coarse::kNever);
   }
-  if (isLost(attempt)) {
-    state_ = TrackingState::kLost;
-    velocity_.setZero();
-    last_quality_ = 0.0;
-    TrackResult result;
-    result.status = TrackStatus::kLost;
-    result.pose.state = TrackingState::kLost;
-    result.pose.T_w_c = T_c_w_.inverse();
-    result.pose.points_tracked = attempt.found;
-    result.pose.quality = attempt.quality;
-    return result;
+  if (isLost(attempt)) return lostResult(attempt, lossReason(attempt), false);
+  if (const DepthIntegrity integrity = integrityOf(attempt, frame); !integrity.consistent) {
+    frame_inconsistent_ = true;
+    std::optional<Attempt> retried = retryConsistent(predicted, frame);
+    if (!retried) return lostResult(attempt, "depth disagrees with the pose: " + integrity.describe(), true);
+    attempt = *retried;
   }
   const TrackingState state =
       attempt.quality >= options_.quality.good ? TrackingState::kTracking : TrackingState::kDodgy;
@@ -315,6 +327,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // glass cabinets close by) the quality stays below good although the pose is right,
     // and a tracker that lost such a stretch once would otherwise never come back.
     if (isLost(attempt) || (!near_last && attempt.quality < options_.quality.good)) continue;
+    if (!integrityOf(attempt, frame).consistent) continue;  // a wrong pose is worse than none
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
@@ -322,6 +335,57 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   result.status = TrackStatus::kLost;
   result.pose.state = TrackingState::kLost;
   result.pose.T_w_c = T_c_w_.inverse();
+  return result;
+}
+
+DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFrame& frame) {
+  if (!options_.integrity.enabled || !depthInTracking(mode_) || frame.depth.empty()) return DepthIntegrity{};
+  // Points seen through at most of their accepted poses (glass, wrong points) say nothing.
+  integrity_points_.clear();
+  integrity_slots_.clear();
+  for (PointSlot* slot : stage_) {
+    slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
+    if (slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_seen_through > slot->depth_checks) continue;
+    integrity_points_.push_back(slot->point->p_w);
+    integrity_slots_.push_back(slot);
+  }
+  const DepthIntegrity integrity =
+      checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,
+                          options_.keyframe_build.min_depth_m, options_.keyframe_build.max_depth_m,
+                          options_.integrity, &integrity_verdicts_);
+  for (size_t i = 0; i < integrity_slots_.size(); ++i) {
+    integrity_slots_[i]->depth_verdict = static_cast<int8_t>(integrity_verdicts_[i]);
+  }
+  return integrity;
+}
+
+std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, const RgbdFrame& frame) {
+  for (const SE3& start : {predicted, T_c_w_}) {
+    const Attempt retry = trackFrom(start, frame, Coarse::kNever);
+    if (!isLost(retry) && integrityOf(retry, frame).consistent) return retry;
+  }
+  return std::nullopt;
+}
+
+std::string Tracker::Impl::lossReason(const Attempt& attempt) const {
+  if (attempt.searched == 0) return "no map point in view";
+  if (attempt.found < options_.quality.min_points_tracked) return std::to_string(attempt.found) + " points found";
+  if (attempt.quality < options_.quality.lost) return "quality " + std::to_string(attempt.quality).substr(0, 4);
+  return "the points found do not fix the pose";
+}
+
+TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason, bool inconsistent) {
+  state_ = TrackingState::kLost;
+  velocity_.setZero();
+  last_quality_ = 0.0;
+  TrackResult result;
+  result.status = TrackStatus::kLost;
+  result.pose.state = TrackingState::kLost;
+  result.pose.T_w_c = T_c_w_.inverse();
+  result.pose.points_tracked = attempt.found;
+  result.pose.quality = attempt.quality;
+  result.lost_reason = std::move(reason);
+  frame_inconsistent_ = frame_inconsistent_ || inconsistent;
   return result;
 }
 
@@ -373,6 +437,11 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   last_quality_ = attempt.quality;
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
   for (PointSlot* slot : stage_) {
+    if (slot->depth_verdict != static_cast<int8_t>(DepthVerdict::kUnchecked)) {
+      ++slot->depth_checks;
+      slot->depth_seen_through += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kSeenThrough);
+      slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
+    }
     if (!slot->searched) continue;
     ++slot->point->times_projected;
     if (slot->found) ++slot->point->times_found;

@@ -86,6 +86,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_candidates", &relocalise_candidates, 1, 100, "keyframes",
           "most similar keyframes tried per frame when lost");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
+  integrity.bind(r, s);
   bindRules(this, r);
 }
 

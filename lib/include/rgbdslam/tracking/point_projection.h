@@ -54,6 +54,10 @@ struct PointSlot {
   bool found = false;
   Eigen::Vector2d found_uv = Eigen::Vector2d::Zero();  // level 0
   int found_level = 0;
+  // The depth integrity check (depth_integrity.h) at accepted poses: how often the point was
+  // checked and seen through (glass, a wrong point), and the current frame's verdict.
+  int depth_checks = 0, depth_seen_through = 0;
+  int8_t depth_verdict = 0;  // DepthVerdict of the last check
 };
 
 // Fills the slot's point, source and unprojection Jacobian, and drops its patch cache.

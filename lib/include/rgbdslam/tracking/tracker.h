@@ -8,7 +8,9 @@
 //   levels with a wide search, only when the image is predicted to move more than the fine
 //   search covers; fine stage: many points). Tracking quality (fraction found) gives
 //   tracking / dodgy / lost, and a frame whose found points do not fix the pose (its
-//   standard deviation from the fit) is lost too; when lost, the relocaliser compares the
+//   standard deviation from the fit) is lost too, and so is one whose pose the depth image
+//   contradicts (depth_integrity.h; after retries from the prediction and the last pose);
+//   when lost, the relocaliser compares the
 //   small blurry image with every keyframe's and tries the best. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
@@ -24,6 +26,7 @@
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/model/point_creation.h"
 #include "rgbdslam/model/slam_mode.h"
+#include "rgbdslam/tracking/depth_integrity.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/tracking/pose_estimate.h"
@@ -116,6 +119,7 @@ struct TrackerOptions {
                                    // must fix its pose (quality.max_pose_sigma_*)
   int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
   int random_seed = 1;             // seed of the point subset selection (deterministic)
+  DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
 };
@@ -139,6 +143,10 @@ struct TrackResult {
   PoseEstimate pose;
   std::optional<KeyframeData> new_keyframe;  // for the mapper, with provisional points
   std::string error;                         // for kBadFrame
+  std::string lost_reason;                   // for kLost: why ("4 points found", "depth ...")
+  // The depth image contradicted this frame's first pose (DepthIntegrityOptions): tracked
+  // again from the prediction and the last pose; lost if no attempt agreed with depth.
+  bool inconsistent = false;
   double track_ms = 0.0;                     // time spent in track() [ms]
 };
 

@@ -1,0 +1,66 @@
+#pragma once
+// The depth image's word on a tracked pose (issue 12): where the pose puts a map point, the
+// depth image must not see through it. For a sample of the visible map points, the nearest
+// surface the frame measured within window_px of the point's projection is compared with the
+// point's depth at the pose. A surface nearer than the point is an occlusion (something in
+// front; allowed). A surface farther than the point, by more than the depth noise of both
+// (the noise model's a z^2 for the reading and for the point, which came from a reading
+// too; free_space_sigmas of their combined sigma, at least free_space_min_m), means the
+// camera sees through where the point should be: one such point is a wrong point or an
+// edge, many mean the pose is wrong. The pose is inconsistent when more than
+// max_free_space_ratio of the points with a reading are seen through.
+// Glass, mirrors and thin structures are seen through at the right pose too: the caller
+// keeps each point's record of accepted frames and leaves out a point seen through in most
+// of them (the tracker: after 3 checks, more than half seen through).
+// Depth tells translation along the view and rotation wherever the scene has relief; a
+// slide along a plain wall leaves every depth as it was (the 2-D tracker, or point-to-plane
+// alignment against the keyframe's depth, must hold that).
+// Cost: one projection and a (2 window_px + 1)^2 depth lookup per sampled point.
+#include <string>
+#include <vector>
+
+#include "rgbdslam/camera/pinhole_camera.h"
+#include "rgbdslam/geometry/se3.h"
+#include "rgbdslam/image/rgbd_frame.h"
+#include "rgbdslam/model/noise_model.h"
+#include "rgbdslam/util/option_registry.h"
+
+namespace rgbdslam {
+
+struct DepthIntegrityOptions {
+  bool enabled = true;                // in the modes that track with depth
+  int max_samples = 300;              // map points checked per frame at most [points]
+  int min_samples = 30;               // fewer points with a reading: no verdict [points]
+  int window_px = 2;                  // nearest surface within this of the projection [px]
+  double free_space_sigmas = 3.0;     // seen through: farther than this many sigmas [sigmas]
+  double free_space_min_m = 0.02;     // ...and at least this [m]
+  double max_free_space_ratio = 0.2;  // more points seen through: inconsistent
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as integrity_*
+};
+
+struct DepthIntegrity {
+  int checked = 0;     // sampled points with a depth reading near their projection
+  int seen_through = 0;
+  int occluded = 0;    // a surface in front of the point
+  double median_residual = 0.0;      // (measured - predicted) / sigma, median [sigmas]
+  double median_abs_residual = 0.0;  // |...|, median [sigmas]
+  bool judged = false;  // enough points were checked for a verdict
+  bool consistent = true;
+  double seenThroughRatio() const { return checked > 0 ? static_cast<double>(seen_through) / checked : 0.0; }
+  std::string describe() const;  // "12 of 80 points seen through"
+};
+
+// What the check found at one point.
+enum class DepthVerdict : int8_t { kUnchecked, kAgrees, kSeenThrough, kOccluded };
+
+// 'points_w': the visible map points (a sample of at most max_samples is checked, spread
+// evenly); 'frame' with its depth (CV_16UC1, depth_scale); readings outside
+// [min_depth_m, max_depth_m] count as none. 'verdicts', if given, gets one per point.
+DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3& T_c_w,
+                                   const RgbdFrame& frame, const PinholeCamera& camera,
+                                   const NoiseModel& noise, double min_depth_m, double max_depth_m,
+                                   const DepthIntegrityOptions& options,
+                                   std::vector<DepthVerdict>* verdicts = nullptr);
+
+}  // namespace rgbdslam
