@@ -384,5 +384,34 @@ TEST(SyncIntake, RefusesForeignMapsMapIdZeroAndAFullQueue) {
   EXPECT_EQ(fresh.offer({makeKeyframe(camera, 1), {}}), IntakeVerdict::kForeignMap);
 }
 
+// A re-send that arrives while its keyframe is being integrated (here from the journal's
+// append, which runs inside integrateNext) is a duplicate. Queued again, it stayed in the
+// queue below next_id_ for good and left the interrupt flag set, so refinement never
+// converged: SlamSystem's concurrent mapper never finished (seen under ASan, whose slowness
+// let the tracker's re-send period pass during an integration).
+TEST(SyncIntake, AReSendDuringItsIntegrationIsADuplicate) {
+  const PinholeCamera camera = smallCamera();
+  Mapper mapper(camera, MapperOptions{}, SlamMode::kDepthBa);
+  struct ReSendingJournal : MemoryJournal {
+    Status appendKeyframe(const IncomingKeyframe& k) override {
+      verdicts.push_back(sync->offer(k));
+      return MemoryJournal::appendKeyframe(k);
+    }
+    MapperSync* sync = nullptr;
+    std::vector<IntakeVerdict> verdicts;
+  } journal;
+  MapperSync sync(&mapper, MapperSyncOptions{}, &journal);
+  journal.sync = &sync;
+  for (KeyframeId k = 0; k < 2; ++k) {
+    ASSERT_EQ(sync.offer({makeKeyframe(camera, k), {}}), IntakeVerdict::kQueued);
+    ASSERT_TRUE(sync.integrateNext());
+  }
+  EXPECT_EQ(journal.verdicts, std::vector<IntakeVerdict>(2, IntakeVerdict::kDuplicate));
+  EXPECT_EQ(sync.queueLength(), 0u);
+  int refinements = 0;
+  while (sync.refine() && refinements < 100) ++refinements;
+  EXPECT_TRUE(sync.converged()) << "after " << refinements << " refinements";
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -48,7 +48,7 @@ IntakeVerdict MapperSync::offer(IncomingKeyframe incoming) {
     ++counters_.foreign;
     return IntakeVerdict::kForeignMap;
   }
-  if (kf.id < next_id_ || queue_.count(kf.id)) {
+  if (kf.id < next_id_ || kf.id == integrating_ || queue_.count(kf.id)) {
     ++counters_.duplicates;
     publisher_.acknowledgementDue();  // the acknowledgement was probably lost
     return IntakeVerdict::kDuplicate;
@@ -135,6 +135,7 @@ std::optional<IntegrationStep> MapperSync::integrateNext() {
     if (it == queue_.end()) return std::nullopt;
     incoming = std::move(it->second);
     queue_.erase(it);
+    integrating_ = next_id_;
     interrupt_ = false;
   }
   IntegrationStep step;
@@ -142,6 +143,7 @@ std::optional<IntegrationStep> MapperSync::integrateNext() {
   step.result = mapper_->addKeyframe(incoming.keyframe, &interrupt_);
   if (step.result.status != MapperResult::Status::kIntegrated) {
     std::lock_guard<std::mutex> lock(mutex_);
+    integrating_ = -1;
     ++counters_.refused;  // the tracker's re-sends bring it again; nothing else is lost
     return step;
   }
@@ -157,6 +159,7 @@ std::optional<IntegrationStep> MapperSync::integrateNext() {
     dropForeignLocked();
   }
   next_id_ = incoming.keyframe.id + 1;
+  integrating_ = -1;
   ++counters_.integrated;
   publisher_.note(mapper_->takeChanges(), /*integrated=*/true);
   converged_ = false;

@@ -124,6 +124,8 @@ class MapperSync {
   std::map<KeyframeId, IncomingKeyframe> queue_;
   int64_t map_id_ = 0;        // 0 until keyframe 0 (or the journal) names the map
   KeyframeId next_id_ = 0;    // the next keyframe to integrate
+  KeyframeId integrating_ = -1;  // taken from the queue by integrateNext, -1 between: a
+                                 // re-send of it meanwhile is a duplicate, not queued again
   MapPublisher publisher_;
   Counters counters_;
   bool stopping_ = false;
