@@ -81,7 +81,7 @@ ReceiptVerdict MapperSync::onReceipt(const MapReceipt& receipt) {
 // receipt alone skips nothing.
 void MapperSync::skipUnsendableLocked(const MapReceipt& receipt) {
   const KeyframeId from = receipt.keyframes_sendable_from;
-  if (receipt.map_id <= 0 || from > receipt.keyframes_created || queue_.count(next_id_)) return;
+  if (receipt.map_id <= 0 || from > receipt.keyframes_created || queue_.count(next_id_) || integrating_ >= 0) return;
   if (map_id_ == 0 && receipt.keyframes_created == 0) return;
   if (map_id_ != 0 && from <= next_id_) return;
   KeyframeId to = from;
