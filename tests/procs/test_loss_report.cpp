@@ -10,6 +10,7 @@ TrackResult result(TrackResult::Status status, int64_t seq) {
   r.status = status;
   r.pose.seq = seq;
   r.pose.points_tracked = status == TrackResult::Status::kLost ? 3 : 200;
+  if (status == TrackResult::Status::kLost) r.lost_reason = "the points found do not fix the pose";
   return r;
 }
 
@@ -21,7 +22,7 @@ TEST(LossReport, OneLinePerTransition) {
   EXPECT_EQ(report.update(result(S::kInitialised, 0)), "");
   EXPECT_EQ(report.update(result(S::kTracked, 1)), "");
   const std::string lost = report.update(result(S::kLost, 2));
-  EXPECT_NE(lost.find("frame 2: tracking lost (3 points found"), std::string::npos) << lost;
+  EXPECT_NE(lost.find("frame 2: tracking lost (the points found do not fix the pose; 3 points found"), std::string::npos) << lost;
   EXPECT_TRUE(report.lost());
   EXPECT_EQ(report.lostSinceSeq(), 2);
   EXPECT_EQ(report.update(result(S::kLost, 3)), "");
