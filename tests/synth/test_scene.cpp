@@ -136,6 +136,7 @@ TEST(SyntheticSpec, FormatRoundTrips) {
             "room,distortion=0.25:-0.5:0.001:0:0");
   EXPECT_EQ(formatSyntheticSpec(parsed("room,size=320x240,intrinsics=262.5:262.5:159.5:119.5")),
             "room,size=320x240,intrinsics=262.5:262.5:159.5:119.5");
+  EXPECT_EQ(formatSyntheticSpec(parsed("flight,minutes=2,seed=4")), "flight,seed=4,minutes=2");
 }
 
 TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
@@ -177,6 +178,10 @@ TEST(SyntheticSpec, RejectsBadSpecsNamingTheProblem) {
       {"room,intrinsics=500:500:320", "intrinsics"},
       {"room,intrinsics=0:500:320:240", "intrinsics"},
       {"room,size=320x240,intrinsics=300:300:319.5:239.5", "principal point"},
+      {"flight,minutes=0.5,frames=100", "not both"},
+      {"flight,minutes=-1", "minutes"},
+      {"flight,minutes=1000", "minutes"},
+      {"flight,minutes=ten", "minutes"},
   };
   for (const auto& [spec, named] : cases) {
     const auto result = parseSyntheticSpec(spec);
@@ -222,6 +227,9 @@ TEST(SyntheticScene, DefaultLengthsAndTimestamps) {
   EXPECT_LT((truth[10].T_w_c.inverse() * room.groundTruthPose(10)).log().norm(), 1e-12);
   EXPECT_EQ(SyntheticScene(parsed("corridor")).numFrames(), 3300u);
   EXPECT_EQ(SyntheticScene(parsed("room,frames=7")).numFrames(), 7u);
+  EXPECT_EQ(SyntheticScene(parsed("flight")).numFrames(), 18000u);  // ten minutes
+  EXPECT_EQ(SyntheticScene(parsed("flight,minutes=2")).numFrames(), 3600u);
+  EXPECT_EQ(SyntheticScene(parsed("room,minutes=0.5,rate=20")).numFrames(), 600u);
 }
 
 TEST(SyntheticScene, RoomTrajectoryIsHandHeldInsideTheRoom) {
@@ -260,6 +268,103 @@ TEST(SyntheticScene, CorridorTravelsAtLeast100Metres) {
   EXPECT_LT(max_speed, 1.3);
   const double duration = (corridor.numFrames() - 1) / corridor.options().rate_hz;
   EXPECT_NEAR(path / duration, 1.0, 0.1);  // ~1 m/s
+}
+
+// The flight's free space (lib/src/synth/flight.cpp): rooms and corridors with their height
+// and their open ends (a corridor end opens into a room or another corridor).
+struct FreeSpace {
+  double x0, y0, x1, y1, h;
+  bool open_x0, open_x1, open_y0, open_y1;
+};
+const FreeSpace kFlightSpaces[] = {
+    {0, 0, 8, 7, 3.0, false, false, false, false},      // A
+    {8, 2.5, 20, 4.5, 2.6, true, true, false, false},   // C1
+    {20, -1, 32, 11, 4.0, false, false, false, false},  // B
+    {21, 11, 23, 16, 2.6, false, false, true, true},    // C2
+    {12, 16, 24, 23, 3.0, false, false, false, false},  // C
+    {3, 18, 12, 20, 2.6, false, true, false, false},    // C3a
+    {3, 7, 5, 18, 2.6, false, false, true, true},       // C3b
+};
+
+// True if p keeps 'margin' from every wall, floor and ceiling of some space (an open end
+// reaches 1 m through the doorway into the next space).
+bool insideTheBuilding(const Vec3& p, double margin) {
+  auto inset = [margin](bool open) { return open ? -1.0 : margin; };
+  for (const FreeSpace& s : kFlightSpaces) {
+    if (p.x() >= s.x0 + inset(s.open_x0) && p.x() <= s.x1 - inset(s.open_x1) &&
+        p.y() >= s.y0 + inset(s.open_y0) && p.y() <= s.y1 - inset(s.open_y1) &&
+        p.z() >= margin && p.z() <= s.h - margin) {
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST(SyntheticScene, FlightIsATenMinuteTourOfRoomsAndCorridors) {
+  const SyntheticScene flight(parsed("flight"));
+  const double rate = flight.options().rate_hz;
+  double path = 0, max_speed = 0, max_rate = 0, z_min = 1e9, z_max = -1e9;
+  int hover_frames = 0, longest_hover = 0, fast_frames = 0, spin_frames = 0;
+  int returns_to_start = 0;
+  bool away = false;
+  const Vec3 start = flight.groundTruthPose(0).translation();
+  for (size_t i = 0; i < flight.numFrames(); ++i) {
+    const SE3 T = flight.groundTruthPose(i);
+    const Vec3& p = T.translation();
+    ASSERT_TRUE(insideTheBuilding(p, 0.4)) << "frame " << i << " at " << p.transpose();
+    z_min = std::min(z_min, p.z()), z_max = std::max(z_max, p.z());
+    const double from_start = (p - start).head<2>().norm();
+    if (from_start > 10) away = true;
+    if (away && from_start < 3) returns_to_start += 1, away = false;
+    if (i == 0) continue;
+    const SE3 step = flight.groundTruthPose(i - 1).inverse() * T;
+    const double speed = step.translation().norm() * rate;
+    const double turn_rate = logSO3(step.rotationMatrix()).norm() * rate * 180 / M_PI;
+    max_speed = std::max(max_speed, speed);
+    max_rate = std::max(max_rate, turn_rate);
+    path += step.translation().norm();
+    hover_frames = speed < 0.02 && turn_rate < 2 ? hover_frames + 1 : 0;
+    longest_hover = std::max(longest_hover, hover_frames);
+    fast_frames += speed > 1.8;
+    spin_frames += turn_rate > 80;
+  }
+  EXPECT_GT(path, 400.0);  // ~0.8 m/s on average over ten minutes
+  EXPECT_GT(max_speed, 1.9);
+  EXPECT_LE(max_speed, 2.05);
+  EXPECT_GT(max_rate, 85.0);
+  EXPECT_LE(max_rate, 100.0);  // the spin's 90 deg/s and a little roll
+  EXPECT_GT(fast_frames, 10 * rate);  // seconds at ~2 m/s
+  EXPECT_GT(spin_frames, 10 * rate);  // seconds of spinning
+  EXPECT_GE(longest_hover, 1.0 * rate);
+  EXPECT_GT(z_max - z_min, 1.0);  // height changes
+  EXPECT_GE(returns_to_start, 4);  // back in the first room after each tour
+  // A short flight is the start of the long one.
+  const SyntheticScene short_flight(parsed("flight,minutes=2"));
+  EXPECT_LT((short_flight.groundTruthPose(3000).inverse() * flight.groundTruthPose(3000)).log().norm(),
+            1e-12);
+}
+
+TEST(SyntheticScene, FlightSeesGlassPlainWallsAndSurfacesBeyondTheDepthRange) {
+  const SyntheticScene flight(parsed("flight,minutes=2"));
+  int glass = 0, far = 0, plain = 0;
+  for (size_t i = 0; i < flight.numFrames(); i += 30) {
+    cv::Mat surfaces;
+    const RgbdFrame frame = flight.renderPose(flight.groundTruthPose(i), i, &surfaces);
+    const double pixels = static_cast<double>(surfaces.total());
+    glass += cv::countNonZero(surfaces == static_cast<int>(SyntheticSurface::kGlass)) > 0.2 * pixels;
+    // No depth on diffuse surfaces: beyond the range (4.5 m).
+    const cv::Mat no_depth = (frame.depth == 0) & (surfaces == static_cast<int>(SyntheticSurface::kDiffuse));
+    far += cv::countNonZero(no_depth) > 0.5 * pixels;
+    cv::Mat grey, gx, gy;
+    cv::cvtColor(frame.colour, grey, cv::COLOR_BGR2GRAY);
+    cv::Sobel(grey, gx, CV_32F, 1, 0);
+    cv::Sobel(grey, gy, CV_32F, 0, 1);
+    cv::Mat magnitude = cv::abs(gx) + cv::abs(gy);
+    plain += cv::countNonZero(magnitude < 40) > 0.7 * pixels;  // image noise alone: ~20
+  }
+  EXPECT_GE(glass, 3) << "frames (of 120) mostly seeing glass";
+  EXPECT_GE(far, 3) << "frames (of 120) mostly beyond the depth range";
+  EXPECT_GE(plain, 3) << "frames (of 120) mostly seeing plain surfaces";
 }
 
 // ---- rendering

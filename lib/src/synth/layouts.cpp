@@ -1,25 +1,17 @@
-// The two synthetic scenes and their trajectories. World frame z-up, metres.
+// The room and the corridor and their trajectories (the flight: flight.cpp). World frame z-up, metres.
 //  room:     x in [0, 6], y in [0, 5], z in [0, 3]; boxes along the walls; the camera moves
 //            in the middle (>= 0.8 m from walls and boxes) and looks around the room.
 //  corridor: 2 m wide, 2.6 m high along +x (y in [-1, 1]); a 6 x 6 m room, 3 m high, in the
 //            middle; weakly textured walls, glass cabinets and black doors (no depth),
 //            posters and ceiling lamps; the camera flies forward at 1 m/s.
+#include <algorithm>
 #include <cmath>
 
 #include "world.h"
 
 namespace rgbdslam::synthetic {
-namespace {
 
-using S = SyntheticSurface;
-
-// Face masks (bit = face index 2 * axis + side).
-constexpr unsigned kAllFaces = 0x3f;
-constexpr unsigned kFaceXLo = 1u << 0, kFaceXHi = 1u << 1, kFaceYLo = 1u << 2,
-                   kFaceYHi = 1u << 3, kFaceZLo = 1u << 4, kFaceZHi = 1u << 5;
-constexpr double kWallThickness = 0.2;  // [m]
-
-// ---- styles
+// ---- styles (world.h)
 TextureStyle richStyle() {  // strongly textured: room surfaces, boxes, posters
   TextureStyle s;
   s.base_grey = 135, s.base_spread = 35, s.tint_spread = 0.25;
@@ -66,6 +58,16 @@ TextureStyle lampStyle() {
   s.base_grey = 250, s.tint_spread = 0.02;
   return s;
 }
+
+namespace {
+
+using S = SyntheticSurface;
+
+// Face masks (bit = face index 2 * axis + side).
+constexpr unsigned kAllFaces = 0x3f;
+constexpr unsigned kFaceXLo = 1u << 0, kFaceXHi = 1u << 1, kFaceYLo = 1u << 2,
+                   kFaceYHi = 1u << 3, kFaceZLo = 1u << 4, kFaceZHi = 1u << 5;
+constexpr double kWallThickness = 0.2;  // [m]
 
 Channel channel(double offset, double slope, std::vector<Wave> waves, std::mt19937_64& rng) {
   for (Wave& w : waves) w.phase = uniform(rng, 0, 2 * M_PI);
@@ -215,8 +217,8 @@ double Channel::at(double t) const {
   return value;
 }
 
-SE3 TrajectoryModel::pose(double t) const {
-  const double psi = yaw.at(t), theta = pitch.at(t), phi = roll.at(t);
+SE3 poseOf(const PathState& s) {
+  const double psi = s.yaw, theta = s.pitch, phi = s.roll;
   const Vec3 forward(std::cos(theta) * std::cos(psi), std::cos(theta) * std::sin(psi),
                      std::sin(theta));
   const Vec3 right(std::sin(psi), -std::cos(psi), 0.0);
@@ -226,7 +228,24 @@ SE3 TrajectoryModel::pose(double t) const {
   R_w_c0.col(1) = down;
   R_w_c0.col(2) = forward;
   const Mat3 R_c0_c = Eigen::AngleAxisd(phi, Vec3::UnitZ()).toRotationMatrix();
-  return SE3(Mat3(R_w_c0 * R_c0_c), Vec3(x.at(t), y.at(t), z.at(t)));
+  return SE3(Mat3(R_w_c0 * R_c0_c), Vec3(s.x, s.y, s.z));
+}
+
+PathState SampledPath::at(double t) const {
+  const double f = std::max(0.0, t / dt);
+  const size_t i = static_cast<size_t>(f);
+  if (i + 1 >= samples.size()) return samples.back();
+  const double w = f - static_cast<double>(i);
+  const PathState& a = samples[i];
+  const PathState& b = samples[i + 1];
+  auto mix = [w](double u, double v) { return u + w * (v - u); };
+  return PathState{mix(a.x, b.x),     mix(a.y, b.y),         mix(a.z, b.z),
+                   mix(a.yaw, b.yaw), mix(a.pitch, b.pitch), mix(a.roll, b.roll)};
+}
+
+SE3 TrajectoryModel::pose(double t) const {
+  if (!path.samples.empty()) return poseOf(path.at(t));
+  return poseOf(PathState{x.at(t), y.at(t), z.at(t), yaw.at(t), pitch.at(t), roll.at(t)});
 }
 
 World buildRoom(uint64_t seed, double /*duration_s*/) {

@@ -21,11 +21,13 @@ namespace {
 constexpr int64_t kEpochUs = 1700000000LL * 1000000LL;  // time of frame 0 [us]
 constexpr double kRoomDefaultSeconds = 20.0;             // 600 frames at 30 Hz
 constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz, 110 m
+constexpr double kFlightDefaultSeconds = 600.0;          // a ten-minute flight
+constexpr double kMaxMinutes = 120.0;                    // limit of the minutes key
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
 constexpr int kMinImageSidePx = 32, kMaxImageSidePx = 4096;  // limits of the size key [px]
 constexpr int kCoveredGreyLevel = 8;                     // a covered lens' image [grey level]
 constexpr const char* kKnownKeys =
-    "seed, frames, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
+    "seed, frames, minutes, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
     "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion, size, intrinsics";
 
 PinholeCamera syntheticCamera() {
@@ -139,6 +141,9 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
   } else if (key == "quantise") {
     if (value != "0" && value != "1") return badValue(key, value, "0 or 1");
     n.quantise = value == "1";
+  } else if (key == "minutes") {
+    if (!is_number) return badValue(key, value, "a number of minutes");
+    o->minutes = number;
   } else if (key == "rate" || key == "depth_fraction" || key == "min_range" ||
              key == "max_range" || key == "noise_sigma" || key == "depth_sigma") {
     if (!is_number) return badValue(key, value, "a number");
@@ -216,8 +221,10 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
         options.scene = SyntheticSceneKind::kRoom;
       } else if (item == "corridor") {
         options.scene = SyntheticSceneKind::kCorridor;
+      } else if (item == "flight") {
+        options.scene = SyntheticSceneKind::kFlight;
       } else {
-        return Error{where + "unknown scene '" + item + "' (expected room or corridor)"};
+        return Error{where + "unknown scene '" + item + "' (expected room, corridor or flight)"};
       }
       continue;
     }
@@ -235,12 +242,15 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
 std::string formatSyntheticSpec(const SyntheticOptions& o) {
   const SyntheticOptions d;
   const KinectNoiseOptions& n = o.noise;
-  std::string spec = o.scene == SyntheticSceneKind::kRoom ? "room" : "corridor";
+  std::string spec = o.scene == SyntheticSceneKind::kRoom       ? "room"
+                     : o.scene == SyntheticSceneKind::kCorridor ? "corridor"
+                                                                : "flight";
   auto add = [&spec](const char* key, const std::string& value) {
     spec += std::string(",") + key + "=" + value;
   };
   if (o.seed != d.seed) add("seed", std::to_string(o.seed));
   if (o.num_frames != d.num_frames) add("frames", std::to_string(o.num_frames));
+  if (o.minutes != d.minutes) add("minutes", formatDouble(o.minutes));
   if (o.rate_hz != d.rate_hz) add("rate", formatDouble(o.rate_hz));
   if (n.depth_fraction != d.noise.depth_fraction) {
     add("depth_fraction", formatDouble(n.depth_fraction));
@@ -279,6 +289,13 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
 Status validateSyntheticOptions(const SyntheticOptions& o) {
   const KinectNoiseOptions& n = o.noise;
   if (o.num_frames < 0) return Error{"frames must be >= 0 (0: the scene's default)"};
+  if (!(o.minutes >= 0 && o.minutes <= kMaxMinutes)) {
+    return Error{"minutes must be in (0, 120], got " + formatDouble(o.minutes)};
+  }
+  if (o.minutes > 0 && o.num_frames > 0) {
+    return Error{"give frames or minutes, not both (frames " + std::to_string(o.num_frames) +
+                 ", minutes " + formatDouble(o.minutes) + ")"};
+  }
   if (!(o.rate_hz > 0) || !std::isfinite(o.rate_hz)) return Error{"rate must be > 0 Hz"};
   if (!(n.depth_fraction > 0 && n.depth_fraction <= 1)) {
     return Error{"depth_fraction must be in (0, 1], got " + formatDouble(n.depth_fraction)};
@@ -330,16 +347,28 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
 SyntheticScene::SyntheticScene(const SyntheticOptions& options)
     : options_(options), camera_(distortedCamera(options)) {
   assert(validateSyntheticOptions(options).ok());
-  const bool room = options.scene == SyntheticSceneKind::kRoom;
-  const double default_s = room ? kRoomDefaultSeconds : kCorridorDefaultSeconds;
+  const double default_s = options.scene == SyntheticSceneKind::kRoom       ? kRoomDefaultSeconds
+                           : options.scene == SyntheticSceneKind::kCorridor ? kCorridorDefaultSeconds
+                                                                            : kFlightDefaultSeconds;
+  const double seconds = options.minutes > 0 ? 60.0 * options.minutes : default_s;
   num_frames_ = options.num_frames > 0
                     ? static_cast<size_t>(options.num_frames)
-                    : static_cast<size_t>(std::lround(default_s * options.rate_hz));
+                    : static_cast<size_t>(std::lround(seconds * options.rate_hz));
   num_frames_ = std::max<size_t>(num_frames_, 1);
   const double duration_s = (num_frames_ - 1) / options.rate_hz;
-  world_ = std::make_shared<const synthetic::World>(
-      room ? synthetic::buildRoom(options.seed, duration_s)
-           : synthetic::buildCorridor(options.seed, duration_s));
+  switch (options.scene) {
+    case SyntheticSceneKind::kRoom:
+      world_ = std::make_shared<const synthetic::World>(synthetic::buildRoom(options.seed, duration_s));
+      break;
+    case SyntheticSceneKind::kCorridor:
+      world_ = std::make_shared<const synthetic::World>(
+          synthetic::buildCorridor(options.seed, duration_s));
+      break;
+    case SyntheticSceneKind::kFlight:
+      world_ = std::make_shared<const synthetic::World>(
+          synthetic::buildFlight(options.seed, duration_s));
+      break;
+  }
   if (camera_.hasDistortion()) {
     lens_ = std::make_shared<const synthetic::LensResampling>(synthetic::makeLensResampling(camera_));
   }

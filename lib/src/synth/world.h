@@ -2,6 +2,7 @@
 // Internals of the synthetic renderer (synth/scene.h), shared by its .cpp files:
 //  - textures.cpp: procedural multi-scale textures baked per box face, with mips;
 //  - layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
+//  - flight.cpp:   the flight: rooms joined by corridors and doors, and a scripted flight;
 //  - raycast.cpp:  exact ray casting of one pose into clean colour and depth;
 //  - noise.cpp:    the Kinect error model and image noise on a clean frame;
 //  - scene.cpp:    the public API, spec parsing, TUM export, the FrameSource.
@@ -49,6 +50,15 @@ struct TextureStyle {
   double tint_spread = 0.1;  // per-channel gain drawn in [1 - tint_spread, 1]
 };
 
+// Styles shared by the layouts (layouts.cpp).
+TextureStyle richStyle();      // strongly textured: room surfaces, boxes, posters
+TextureStyle weakWallStyle();  // corridor walls: low contrast, a few marks
+TextureStyle floorStyle();     // speckled linoleum
+TextureStyle ceilingStyle();
+TextureStyle glassStyle();     // dark glass with objects behind it
+TextureStyle blackStyle();
+TextureStyle lampStyle();
+
 // A face texture: level 0 at 'texel_m' per texel, then 2x smaller levels (pyrDown).
 struct Texture {
   std::vector<cv::Mat> levels;  // CV_8UC1
@@ -79,10 +89,24 @@ struct Channel {
   std::vector<Wave> waves;
   double at(double t) const;
 };
-// Position (x, y, z) and a yaw-pitch-roll camera orientation: yaw about world z (0 looks
-// along +x), pitch up positive, roll about the optical axis.
+// Position (x, y, z) [m] and a yaw-pitch-roll camera orientation [rad]: yaw about world z
+// (0 looks along +x), pitch up positive, roll about the optical axis.
+struct PathState {
+  double x = 0, y = 0, z = 0, yaw = 0, pitch = 0, roll = 0;
+};
+SE3 poseOf(const PathState& s);
+// A path sampled every dt seconds from t = 0 (the flight's scripted path), interpolated
+// linearly between samples (yaw unwrapped, so it interpolates the short way); held at the
+// last sample after its end.
+struct SampledPath {
+  double dt = 0.01;  // [s]
+  std::vector<PathState> samples;
+  PathState at(double t) const;
+};
+// The channels, or the sampled path where it has samples.
 struct TrajectoryModel {
   Channel x, y, z, yaw, pitch, roll;
+  SampledPath path;
   SE3 pose(double t) const;
 };
 
@@ -112,6 +136,7 @@ class WorldBuilder {
 // enough for it).
 World buildRoom(uint64_t seed, double duration_s);
 World buildCorridor(uint64_t seed, double duration_s);
+World buildFlight(uint64_t seed, double duration_s);
 
 // ---- rendering
 // Exact images of one pose: colour without noise, camera-frame depth z [m] of surfaces that

@@ -1,6 +1,10 @@
 #pragma once
-// Synthetic RGB-D sequences with exact ground truth: a textured room and a long corridor
-// (weak texture, glass cabinets, black surfaces, a room in the middle), rendered by
+// Synthetic RGB-D sequences with exact ground truth: a textured room, a long corridor
+// (weak texture, glass cabinets, black surfaces, a room in the middle) and a flight (a
+// micro aerial vehicle's tours through three rooms joined in a loop by corridors: 2 m/s
+// stretches, 90 deg/s spins, hovering, height changes, rooms entered again through other
+// doors, a figure of eight; plain walls, glass, a dark corner, a hall beyond the depth
+// range; the floor plan is in lib/src/synth/flight.cpp), rendered by
 // analytic ray casting against axis-aligned boxes, with the Kinect error model of the paper
 // (sigma(d) = a d^2, range limits, disparity quantisation, holes).
 //
@@ -14,8 +18,9 @@
 // Determinism: everything random (textures, trajectory phases, noise) derives from
 // options.seed through std::mt19937_64 seeded per purpose and per frame, so the same
 // options give bit-identical frames in any order and on every call. The geometry, textures
-// and trajectory depend only on (scene, seed, num_frames, rate_hz), never on the noise
-// options: two scenes differing only in noise see the same surfaces.
+// and trajectory depend only on (scene, seed, length, rate_hz), never on the noise
+// options: two scenes differing only in noise see the same surfaces. The flight's floor
+// plan does not depend on the length, and a short flight is the start of a long one.
 //
 // Call order: parseSyntheticSpec() (or fill SyntheticOptions), construct SyntheticScene
 // (builds and bakes textures, ~0.1-0.5 s), then render(i) in any order; render() is const
@@ -35,7 +40,7 @@
 
 namespace rgbdslam {
 
-enum class SyntheticSceneKind { kRoom, kCorridor };
+enum class SyntheticSceneKind { kRoom, kCorridor, kFlight };
 
 // What a pixel sees (the optional label image of SyntheticScene::renderPose).
 enum class SyntheticSurface : uint8_t {
@@ -73,7 +78,9 @@ struct KinectNoiseOptions {
 struct SyntheticOptions {
   SyntheticSceneKind scene = SyntheticSceneKind::kRoom;
   uint64_t seed = 1;     // everything random derives from it
-  int num_frames = 0;    // 0: the scene's default length (room 600, corridor 3300)
+  int num_frames = 0;    // 0: from minutes, else the scene's default length (room 600,
+                         // corridor 3300, flight 18000 frames: 20 s, 110 s, 10 min)
+  double minutes = 0;    // length in minutes (0: see num_frames; not with num_frames)
   double rate_hz = 30.0; // frame rate [Hz]
   // Frames drop_first..drop_last (indices, inclusive) are left out by the FrameSource, as if
   // the camera or the link lost them: the frames around keep their indices and timestamps,
@@ -113,13 +120,14 @@ struct SyntheticOptions {
   }
 };
 
-// "room" or "corridor" followed by optional ",key=value" pairs: seed, frames, rate,
+// "room", "corridor" or "flight" followed by optional ",key=value" pairs: seed, frames,
+// minutes, rate,
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
 // (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
 // or one index N; see SyntheticOptions::drop_first), every (K >= 1), cover (FIRST-LAST or N,
 // like drop), distortion (K1:K2:P1:P2[:K3], colon-separated), size (WxH), intrinsics
 // (FX:FY:CX:CY). E.g.
-// "room,seed=3,depth_fraction=0.3", "room,frames=300,drop=120-149", "room,every=2",
+// "room,seed=3,depth_fraction=0.3", "flight,minutes=2", "room,frames=300,drop=120-149", "room,every=2",
 // "room,cover=120-149", "room,distortion=0.2624:-0.9531:-0.0054:0.0026:1.1633".
 // An unknown key or bad value is an Error naming it.
 Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
