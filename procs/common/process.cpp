@@ -2,7 +2,10 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <string>
 
 namespace rgbdslam {
 namespace {
@@ -17,6 +20,29 @@ std::atomic<bool>& installStopHandlers() {
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
   return g_stop;
+}
+
+MemoryUsage memoryUsage() {
+  MemoryUsage usage;
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  int64_t value = 0;
+  // Lines "VmHWM:\t   12345 kB"; the value stays -1 if a line is missing or malformed.
+  while (status >> key) {
+    int64_t* target = key == "VmRSS:" ? &usage.rss_kb : key == "VmHWM:" ? &usage.peak_rss_kb : nullptr;
+    if (target && status >> value) *target = value;
+    status.ignore(1 << 12, '\n');
+  }
+  return usage;
+}
+
+void printPeakRss() {
+  const MemoryUsage usage = memoryUsage();
+  if (usage.peak_rss_kb < 0) {
+    std::printf("peak_rss_mb unknown\n");
+  } else {
+    std::printf("peak_rss_mb %.1f\n", usage.peak_rss_kb / 1024.0);
+  }
 }
 
 int64_t utimeNow() {

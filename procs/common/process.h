@@ -20,6 +20,18 @@ std::atomic<bool>& installStopHandlers();
 // Host clock, microseconds since the epoch.
 int64_t utimeNow();
 
+// This process's resident memory: now (VmRSS) and its peak so far (VmHWM), from
+// /proc/self/status [kB]; -1 where it cannot be read (not Linux, /proc not mounted). Every
+// process reports both in its status messages (rss_kb, peak_rss_kb) and prints peak_rss_mb
+// at exit, so memory over a long flight can be followed from the ground.
+struct MemoryUsage {
+  int64_t rss_kb = -1;
+  int64_t peak_rss_kb = -1;
+};
+MemoryUsage memoryUsage();
+// Prints "peak_rss_mb X.X" (or "peak_rss_mb unknown") on stdout, the exit summary's form.
+void printPeakRss();
+
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);
 

@@ -158,6 +158,7 @@ void MapperNode::publish(int64_t now_us) {
 
 void MapperNode::publishStatus() {
   const MapperSync::Counters c = sync_->counters();
+  const MemoryUsage memory = memoryUsage();
   ComponentStatus status;
   status.utime = utimeNow();
   status.component = "rgbd-mapper";
@@ -184,7 +185,9 @@ void MapperNode::publishStatus() {
                      {"versions_caught_up", c.versions_caught_up},
                      {"keyframes_skipped", c.keyframes_skipped},
                      {"map_bytes", map_bytes_.load()},
-                     {"journal_errors", c.journal_errors}};
+                     {"journal_errors", c.journal_errors},
+                     {"rss_kb", memory.rss_kb},
+                     {"peak_rss_kb", memory.peak_rss_kb}};
   status.timings_ms = {{"integrate_ms_median", integrate_ms_.quantile(0.5)},
                        {"local_ba_ms_median", local_ba_ms_.quantile(0.5)},
                        {"local_ba_ms_max", local_ba_ms_.quantile(1.0)},
@@ -223,6 +226,8 @@ void MapperNode::printSummary() const {
               << " times) and " << c.keyframes_skipped << " keyframes the tracker no longer held (skipped)";
   }
   std::cerr << "\n";
+  printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries
+  std::fflush(stdout);
 }
 
 }  // namespace rgbdslam

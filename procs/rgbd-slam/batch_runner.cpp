@@ -1,6 +1,5 @@
 #include "rgbd-slam/batch_runner.h"
 
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,6 +7,7 @@
 #include <limits>
 #include <iostream>
 
+#include "common/process.h"
 #include "common/source_factory.h"
 #include "rgbdslam/camera/calibration_io.h"
 #include "rgbdslam/eval/trajectory_eval.h"
@@ -167,9 +167,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   }
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);  // ru_maxrss: peak resident set size [kB] on Linux
-  std::printf("peak_rss_mb %.1f\n", usage.ru_maxrss / 1024.0);
+  printPeakRss();
   std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\n", percentile(track_ms_, 0.5), percentile(track_ms_, 0.95));
   if (!groundtruth_) {
     std::printf("ate_rmse_m unknown (no ground truth)\n");

@@ -216,6 +216,7 @@ void TrackerNode::publishStatus() {
   status.component = "rgbd-tracker";
   status.state = toString(state_);
   const Counters& c = counters_;
+  const MemoryUsage memory = memoryUsage();
   status.counters = {{"map_id", map_id_},
                      {"map_version", sync_.follower().version()},
                      {"map_version_newest_seen", sync_.follower().newestSeen()},
@@ -245,7 +246,9 @@ void TrackerNode::publishStatus() {
                      {"maps_foreign", c.maps_foreign},
                      {"maps_missing_delta", c.maps_missing_delta},
                      {"maps_unknown_keyframe", c.maps_unknown_keyframe},
-                     {"maps_implausible", c.maps_implausible}};
+                     {"maps_implausible", c.maps_implausible},
+                     {"rss_kb", memory.rss_kb},
+                     {"peak_rss_kb", memory.peak_rss_kb}};
   status.timings_ms = {{"track_ms_median", track_ms_.quantile(0.5)},
                        {"track_ms_p99", track_ms_.quantile(0.99)},
                        {"latency_ms_median", latency_ms_.quantile(0.5)},
@@ -286,6 +289,7 @@ void TrackerNode::printSummary() const {
               track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",
               ack_ms_.quantile(0.5), ack_ms_.quantile(1.0), in_map_ms_.quantile(0.5), in_map_ms_.quantile(1.0));
+  printPeakRss();
   std::fflush(stdout);
 }
 

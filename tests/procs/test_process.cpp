@@ -1,0 +1,30 @@
+#include "common/process.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <memory>
+
+namespace rgbdslam {
+namespace {
+
+TEST(MemoryUsage, ReadsTheResidentAndPeakMemoryOfThisProcess) {
+  const MemoryUsage before = memoryUsage();
+  ASSERT_GT(before.rss_kb, 1000) << "a gtest binary holds more than 1 MB";
+  EXPECT_GE(before.peak_rss_kb, before.rss_kb);
+  constexpr size_t kBytes = 64u << 20;
+  {
+    auto block = std::make_unique<char[]>(kBytes);
+    std::memset(block.get(), 1, kBytes);  // touched, so resident
+    const MemoryUsage during = memoryUsage();
+    EXPECT_GE(during.rss_kb - before.rss_kb, 60 * 1024);
+    EXPECT_GE(during.peak_rss_kb, during.rss_kb);
+    volatile char sink = block[kBytes / 2];
+    (void)sink;
+  }
+  const MemoryUsage after = memoryUsage();
+  EXPECT_GE(after.peak_rss_kb - before.rss_kb, 60 * 1024) << "the peak keeps the 64 MB";
+}
+
+}  // namespace
+}  // namespace rgbdslam
