@@ -28,6 +28,35 @@ start() {
   eval "PID_${name//-/_}=$!"
 }
 
+# sample_memory PERIOD_S FILE NAME...: in the background, every PERIOD_S seconds (an
+# integer), appends "t_s NAME_rss_mb..." to FILE: the resident memory (VmRSS) of each
+# process started as NAME, "-" once it has ended. Ends when none of them is alive (checked
+# each second), or after 24 h.
+sample_memory() {
+  local period=$1 file=$2
+  shift 2
+  local names=("$@") pids=() name
+  for name in "${names[@]}"; do pids+=("$(eval echo "\${PID_${name//-/_}}")"); done
+  echo "t_s ${names[*]/%/_rss_mb}" > "$file"
+  (
+    local i pid rss line alive
+    for ((i = 0; i < 86400; i++)); do
+      if ((i % period == 0)); then
+        line=$i
+        for pid in "${pids[@]}"; do
+          rss=$(awk '/^VmRSS:/ { printf "%.1f", $2 / 1024 }' "/proc/$pid/status" 2> /dev/null || true)
+          line+=" ${rss:--}"
+        done
+        echo "$line" >> "$file"
+      fi
+      alive=0
+      for pid in "${pids[@]}"; do kill -0 "$pid" 2> /dev/null && alive=1; done
+      [ $alive = 1 ] || break
+      sleep 1
+    done
+  ) &
+}
+
 # Stops every process started with start() (SIGINT, then SIGKILL after 10 s).
 stop_all() {
   local pid i

@@ -22,6 +22,11 @@ std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
   return d;
 }
 
+void Keyframe::releaseMappingData() {
+  depth.release();
+  std::vector<LevelCorners>().swap(corners);
+}
+
 cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m) {
   if (raw.empty()) return cv::Mat();
   cv::Mat out(raw.size(), CV_32FC1);

@@ -626,6 +626,7 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
                                    provisionalPointId(data.id, 0));
   }
+  keyframe->releaseMappingData();  // the mapper gets 'data'; the replica tracks with the pyramid
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (!isProvisionalPointOf(np.point.id, data.id)) break;

@@ -39,6 +39,10 @@ struct Keyframe {
 
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }
+  // Frees what only the mapper reads after the keyframe's points are made (the metric depth,
+  // 4 bytes a pixel, and the corners): the tracker's replica keeps the pyramid (the points'
+  // patches) and the small blurry image (relocalisation).
+  void releaseMappingData();
   // Depth [m] at a level-0 pixel (nearest pixel); nullopt when there is no valid reading.
   std::optional<double> depthAt(const Eigen::Vector2d& uv) const;
   // The points seen in this keyframe. Changed only through the Map that holds the

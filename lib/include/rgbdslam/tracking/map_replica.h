@@ -9,7 +9,9 @@
 //   keyframes the mapper has not acknowledged stay. A delta updates the listed keyframes,
 //   adds the new points, moves the moved ones (keeping their slots' patch caches) and
 //   removes the listed ids. Entries that name keyframes the replica lacks are skipped.
-// Memory: grows with the map (every keyframe's images and every point's slot).
+// Memory: grows with the map: every keyframe's pyramid (0.41 MB at 640x480; the tracker
+// frees the keyframe's metric depth and corners once its points are made) and small blurry
+// image, and every point's slot.
 // Threads: not thread-safe; the tracker's thread owns it.
 #include <memory>
 #include <unordered_map>
