@@ -79,12 +79,19 @@ void putBigEndian32(std::vector<uint8_t>& bytes, size_t offset, uint32_t value) 
   for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<uint8_t>(value >> (24 - 8 * i));
 }
 
-// Keyframe 0 of 'map_id', 64x48, with one measurement and one new point, then 'spoil'.
+// Keyframe 0 of 'map_id' with one measurement and one new point, then 'spoil'. Camera-sized
+// (640x480, the synthetic camera's), textured and with depth 2 m everywhere, so that the
+// mapper would take it in if it did not check the spoilt field: a smaller keyframe is
+// refused for its size before any field is looked at.
 std::vector<uint8_t> spoiledKeyframe(int64_t map_id, void (*spoil)(rgbdslam::keyframe_t&)) {
   KeyframeData keyframe;
   keyframe.map_id = map_id;
   keyframe.id = 0;
-  keyframe.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(100));
+  keyframe.grey = cv::Mat(480, 640, CV_8UC1);
+  cv::RNG rng(13);
+  rng.fill(keyframe.grey, cv::RNG::UNIFORM, 0, 256);
+  keyframe.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(10000));
+  keyframe.depth_scale = 5000.0;
   keyframe.measurements.push_back({5, Eigen::Vector2d(10, 10), 0, 1.5});
   keyframe.new_points.push_back({1, Vec3(0, 0, 2), 0, Eigen::Vector2d(20, 20), 0});
   rgbdslam::keyframe_t msg = toLcm(keyframe);
