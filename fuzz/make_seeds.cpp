@@ -39,6 +39,10 @@ void writeMessages(const fs::path& out) {
   write(out / "fuzz_status", "tracker", test::encode(toLcm(test::sampleStatus())));
   write(out / "fuzz_status", "empty", test::encode(toLcm(ComponentStatus{})));
   write(out / "fuzz_pose", "tracking", test::encode(toLcm(test::samplePose(), 77)));
+  write(out / "fuzz_map_receipt", "behind", test::encode(toLcm(test::sampleReceipt())));
+  MapReceipt first;  // a new tracker's first receipt: nothing applied, keyframe 0 sendable
+  first.map_id = 1;
+  write(out / "fuzz_map_receipt", "first", test::encode(toLcm(first)));
 }
 
 void writeFiles(const fs::path& out, const fs::path& source) {

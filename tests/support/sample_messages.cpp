@@ -72,6 +72,18 @@ PoseEstimate samplePose() {
   return pose;
 }
 
+MapReceipt sampleReceipt() {
+  MapReceipt receipt;
+  receipt.utime = 1700000001000000;
+  receipt.map_id = 1234;
+  receipt.applied_version = 8;
+  receipt.newest_version_seen = 9;
+  receipt.keyframes_created = 6;
+  receipt.keyframes_unacked = 3;
+  receipt.keyframes_sendable_from = 2;
+  return receipt;
+}
+
 namespace {
 void putBigEndian(std::vector<uint8_t>& out, uint64_t value, int bytes) {
   for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<uint8_t>(value >> (8 * i)));

@@ -15,6 +15,7 @@ KeyframeData sampleKeyframe();    // keyframe 3 of map 1234: grey, depth, a meas
 MapUpdate sampleMapUpdate();      // a snapshot: acknowledgements, a keyframe, points, removals
 ComponentStatus sampleStatus();   // two counters, one timing
 PoseEstimate samplePose();        // tracking, a pose away from the origin
+MapReceipt sampleReceipt();       // map 1234: version 8 applied, 9 seen, keyframes 2..5 sendable
 
 // Appends one event in the LCM log format (common/lcm_log_reader.h) to 'log'; a
 // claimed_length >= 0 is written instead of the data's true length.
