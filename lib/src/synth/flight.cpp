@@ -36,10 +36,8 @@ namespace {
 using S = SyntheticSurface;
 
 constexpr double kTexelM = 0.01;
-constexpr double kWall = 0.2;  // wall, floor and ceiling thickness [m]
+constexpr double kWall = kWallThickness;
 constexpr double kCorridorH = 2.6, kRoomH = 3.0, kHallH = 4.0;  // heights [m]
-constexpr unsigned kFaceXLo = 1u << 0, kFaceXHi = 1u << 1, kFaceYLo = 1u << 2,
-                   kFaceYHi = 1u << 3, kFaceZLo = 1u << 4, kFaceZHi = 1u << 5;
 
 // ---- styles of the flight's own surfaces
 TextureStyle plainWallStyle() {  // painted wall: almost nothing to track
@@ -127,7 +125,7 @@ void addSpace(WorldBuilder& b, const Space& s) {
 void addOnWall(WorldBuilder& b, const Space& s, int side, double a, double b_, double depth,
                double z0, double z1, S surface, const TextureStyle& style, bool front_only) {
   const unsigned front[4] = {kFaceXHi, kFaceXLo, kFaceYHi, kFaceYLo};
-  const unsigned faces = front_only ? front[side] : 0x3fu;
+  const unsigned faces = front_only ? front[side] : kAllFaces;
   switch (side) {
     case kWest: b.add(Vec3(s.x0, a, z0), Vec3(s.x0 + depth, b_, z1), surface, style, faces); break;
     case kEast: b.add(Vec3(s.x1 - depth, a, z0), Vec3(s.x1, b_, z1), surface, style, faces); break;
@@ -254,7 +252,7 @@ constexpr double kBankFactor = 0.5;       // camera roll = this * the coordinate
 constexpr double kGravity = 9.81;         // [m/s^2]
 constexpr double kTopSpeed = 2.0;         // in C1 [m/s]
 
-double wrapAngle(double a) { return std::remainder(a, 2 * M_PI); }
+double wrapToPi(double a) { return std::remainder(a, 2 * M_PI); }
 
 class FlightScript {
  public:
@@ -276,7 +274,7 @@ class FlightScript {
     if (distance < 1e-6) return;
     double yaw = from.yaw;
     if (std::hypot(dx, dy) > 0.05) {
-      const double turn = wrapAngle(std::atan2(dy, dx) - from.yaw);
+      const double turn = wrapToPi(std::atan2(dy, dx) - from.yaw);
       if (std::abs(turn) > M_PI / 6) spin(turn, kTurnRate);
       yaw = from.yaw + turn;
     }

@@ -63,11 +63,6 @@ namespace {
 
 using S = SyntheticSurface;
 
-// Face masks (bit = face index 2 * axis + side).
-constexpr unsigned kAllFaces = 0x3f;
-constexpr unsigned kFaceXLo = 1u << 0, kFaceXHi = 1u << 1, kFaceYLo = 1u << 2,
-                   kFaceYHi = 1u << 3, kFaceZLo = 1u << 4, kFaceZHi = 1u << 5;
-constexpr double kWallThickness = 0.2;  // [m]
 
 Channel channel(double offset, double slope, std::vector<Wave> waves, std::mt19937_64& rng) {
   for (Wave& w : waves) w.phase = uniform(rng, 0, 2 * M_PI);

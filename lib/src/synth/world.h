@@ -69,7 +69,12 @@ Texture bakeTexture(double width_m, double height_m, double texel_m, const Textu
                     std::mt19937_64& rng);
 
 // ---- geometry
-// Faces of a box: index = 2 * axis + (0 for the lo face, 1 for the hi face).
+// Faces of a box: index = 2 * axis + (0 for the lo face, 1 for the hi face); masks for
+// WorldBuilder::add (bit = face index).
+constexpr unsigned kAllFaces = 0x3f;
+constexpr unsigned kFaceXLo = 1u << 0, kFaceXHi = 1u << 1, kFaceYLo = 1u << 2,
+                   kFaceYHi = 1u << 3, kFaceZLo = 1u << 4, kFaceZHi = 1u << 5;
+constexpr double kWallThickness = 0.2;  // walls, floors and ceilings of the layouts [m]
 struct Face {
   int texture = 0;                        // index into World::textures (0: plain grey)
   std::array<float, 3> gain{1, 1, 1};    // BGR: tint * lambert shading
