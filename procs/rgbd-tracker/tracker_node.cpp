@@ -32,6 +32,13 @@ bool hasPose(TrackResult::Status status) {
          status == TrackResult::Status::kRelocalised;
 }
 
+// Keyframes of the local map that keep their pyramid (tracking/map_replica.h).
+int64_t hotKeyframes(const Map& map) {
+  int64_t hot = 0;
+  for (const auto& [id, keyframe] : map.keyframes()) hot += keyframe->cold() ? 0 : 1;
+  return hot;
+}
+
 }  // namespace
 
 TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& camera,
@@ -227,6 +234,7 @@ void TrackerNode::publishStatus() {
                      {"mapper_losses", sync_.mapperLosses()},
                      {"keyframe_bytes", c.keyframe_bytes},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
+                     {"keyframes_hot", hotKeyframes(tracker_.map())},
                      {"frames", c.frames},
                      {"frames_skipped", c.frames_skipped},
                      {"poses", c.poses},

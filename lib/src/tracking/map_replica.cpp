@@ -1,6 +1,65 @@
 #include "rgbdslam/tracking/map_replica.h"
 
+#include "rgbdslam/image/codec.h"
+#include "rgbdslam/image/pyramid.h"
+
 namespace rgbdslam {
+
+void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "local_map_keyframes", &keyframes, 0, 1000000, "keyframes",
+          "keyframes that keep their image pyramid: the nearest to the camera; the others keep "
+          "a JPEG and their points are not searched until the camera comes back (0: all)");
+  r->bind(s, "local_map_changes_per_frame", &changes_per_frame, 1, 1000, "keyframes",
+          "keyframes thawed (JPEG decoded, pyramid built: ~2 ms each) and frozen per frame at most");
+  r->bind(s, "local_map_relocalise_thaws", &relocalise_thaws, 0, 1000, "keyframes",
+          "keyframes thawed around each relocalisation candidate");
+  r->bind(s, "cold_keyframe_jpeg_quality", &jpeg_quality, 1, 100, "",
+          "JPEG quality of the images of keyframes outside the local map");
+}
+
+LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
+                                          int max_freezes, int jpeg_quality) {
+  LocalMapChange change;
+  for (KeyframeId id : wanted) {
+    Keyframe* keyframe = map_.keyframe(id);
+    if (!keyframe || !keyframe->cold()) continue;
+    if (change.thawed >= max_thaws) {
+      ++change.left_cold;
+    } else if (thaw(keyframe)) {
+      ++change.thawed;
+    }
+  }
+  if (max_freezes <= 0) return change;
+  const std::unordered_set<KeyframeId> keep(wanted.begin(), wanted.end());
+  for (const auto& [id, keyframe] : map_.keyframes()) {
+    if (keyframe->cold() || keep.count(id)) continue;
+    freeze(keyframe.get(), jpeg_quality);
+    if (++change.frozen >= max_freezes) break;
+  }
+  return change;
+}
+
+int MapReplica::hotKeyframes() const {
+  int hot = 0;
+  for (const auto& [id, keyframe] : map_.keyframes()) hot += keyframe->cold() ? 0 : 1;
+  return hot;
+}
+
+void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
+  if (keyframe->cold_grey.empty()) keyframe->cold_grey = encodeJpeg(keyframe->grey(), jpeg_quality);
+  ImagePyramid().levels.swap(keyframe->pyramid.levels);
+}
+
+bool MapReplica::thaw(Keyframe* keyframe) {
+  const Expected<cv::Mat> grey = decodeImage(keyframe->cold_grey.data(), keyframe->cold_grey.size(), 1,
+                                             camera_.width, camera_.height);
+  if (!grey) return false;  // cannot happen with bytes this process encoded; stays cold
+  buildPyramid(*grey, kMaxLevels, &keyframe->pyramid);
+  for (PointSlot& slot : slots_) {
+    if (slot.source == keyframe) slot.patch_level = -1;  // made from the original image
+  }
+  return true;
+}
 
 void MapReplica::addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& point) {
   addSlot(map_.addPoint(point.point));

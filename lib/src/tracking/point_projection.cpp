@@ -17,7 +17,7 @@ void makeKeyframeViews(const Map& map, const SE3& T_c_w, std::vector<KeyframeVie
     KeyframeView& view = (*views)[static_cast<size_t>(id)];
     const SE3 T_src_w = keyframe->T_c_w();
     const Mat3 R_src_w = T_src_w.rotationMatrix();
-    view.valid = true;
+    view.valid = !keyframe->cold();  // a cold keyframe's points have no source image now
     view.R_cur_src = R_c_w * R_src_w.transpose();
     view.src_z_row = R_src_w.row(2);
     view.src_z_offset = T_src_w.translation().z();

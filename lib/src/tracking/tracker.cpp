@@ -91,6 +91,7 @@ class Tracker::Impl {
   void prepareFrame(const RgbdFrame& frame);
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
+  void updateLocalMap(const SE3& T_w_c, int max_thaws);
   TrackResult trackNormally(const RgbdFrame& frame);
   SE3 predictPose() const;
   // Coarse stage: kIfMoving when the start pose predicts image motion (coarseWanted),
@@ -202,7 +203,19 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   std::swap(previous_sbi_, sbi_);
   have_previous_sbi_ = true;
   tracked.inconsistent = frame_inconsistent_;
+  if (tracked.status == TrackResult::Status::kTracked || tracked.status == TrackResult::Status::kRelocalised) {
+    updateLocalMap(tracked.pose.T_w_c, options_.local_map.changes_per_frame);
+  }
   return tracked;
+}
+
+// The keyframes nearest 'T_w_c' hot, the rest cold (LocalMapOptions), at most 'max_thaws'
+// thawed now: the others of the window follow in the next frames.
+void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
+  const LocalMapOptions& o = options_.local_map;
+  if (o.keyframes <= 0 || replica_.map().numKeyframes() <= static_cast<size_t>(o.keyframes)) return;
+  replica_.updateLocalMap(replica_.map().nearestKeyframes(T_w_c, static_cast<size_t>(o.keyframes)),
+                          max_thaws, o.changes_per_frame, o.jpeg_quality);
 }
 
 void Tracker::Impl::prepareFrame(const RgbdFrame& frame) {
@@ -311,6 +324,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   for (const RelocalisationCandidate& candidate : candidates) {
     const bool near_last = candidate.keyframe < 0;
     const SE3 start = candidate.T_w_c.inverse();
+    if (!near_last) updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
     // From a keyframe's view the camera may be anywhere near: the wide coarse search first.
     // From the last pose the camera has often hardly moved, and on weak texture the coarse
     // stage can pull a pose off (the corridor), so the fine stage alone comes first; short

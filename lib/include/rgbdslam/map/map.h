@@ -36,6 +36,11 @@ struct Keyframe {
   std::vector<LevelCorners> corners;  // FAST corners per level
   SmallBlurryImage sbi;     // for relocalisation
   double median_depth = 2.0;  // median depth of the points it measures [m]
+  // The tracker's local map (tracking/map_replica.h): a keyframe away from the camera is
+  // 'cold': no pyramid, its level-0 image kept as JPEG here, rebuilt when the camera comes
+  // back. The mapper's keyframes are never cold.
+  std::vector<uint8_t> cold_grey;
+  bool cold() const { return pyramid.levels.empty(); }
 
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }

@@ -9,9 +9,15 @@
 //   keyframes the mapper has not acknowledged stay. A delta updates the listed keyframes,
 //   adds the new points, moves the moved ones (keeping their slots' patch caches) and
 //   removes the listed ids. Entries that name keyframes the replica lacks are skipped.
-// Memory: grows with the map: every keyframe's pyramid (0.41 MB at 640x480; the tracker
-// frees the keyframe's metric depth and corners once its points are made) and small blurry
-// image, and every point's slot.
+//   updateLocalMap(wanted): the local map. The keyframes nearest the camera keep their
+//   pyramid ('hot'); the others are 'cold': their level-0 image is kept as JPEG (encoded
+//   once), the pyramid freed, and their points are not searched (makeKeyframeViews marks
+//   them invalid) until the camera comes back and the keyframe is thawed (JPEG decoded,
+//   pyramid rebuilt, its points' patch caches dropped).
+// Memory: every keyframe's small blurry image and pose, every point's slot, the pyramids of
+// the hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth
+// and corners once its points are made) and the JPEG of the cold ones (30-60 kB at quality
+// 90 on textured 640x480 images).
 // Threads: not thread-safe; the tracker's thread owns it.
 #include <memory>
 #include <unordered_map>
@@ -22,8 +28,23 @@
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/model/point_creation.h"
 #include "rgbdslam/tracking/point_projection.h"
+#include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
+
+// The local map: how many keyframes stay hot, and how much work one frame may do on it.
+struct LocalMapOptions {
+  int keyframes = 80;          // hot keyframes: the nearest to the camera (0: all stay hot)
+  int changes_per_frame = 2;   // keyframes thawed, and frozen, per frame at most
+  int relocalise_thaws = 8;    // keyframes thawed around each relocalisation candidate
+  int jpeg_quality = 90;       // cold keyframes' images [1, 100]
+  void bind(OptionRegistry* registry, const std::string& section);  // as local_map_*
+};
+
+struct LocalMapChange {
+  int thawed = 0, frozen = 0;
+  int left_cold = 0;  // wanted but over the thaw budget: thawed on a later call
+};
 
 class MapReplica {
  public:
@@ -35,6 +56,11 @@ class MapReplica {
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool apply(const MapUpdate& update);
   void clear();
+  // Thaws the cold keyframes of 'wanted' (nearest first; at most max_thaws) and freezes hot
+  // keyframes not in it (at most max_freezes).
+  LocalMapChange updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
+                                int max_freezes, int jpeg_quality);
+  int hotKeyframes() const;
 
   const Map& map() const { return map_; }
   std::vector<PointSlot>& slots() { return slots_; }
@@ -43,6 +69,8 @@ class MapReplica {
   void addSlot(MapPoint* point);
   void removeSlot(PointId id);
   void removePoint(PointId id);
+  bool thaw(Keyframe* keyframe);
+  void freeze(Keyframe* keyframe, int jpeg_quality);
 
   PinholeCamera camera_;
   Map map_;

@@ -28,6 +28,7 @@
 #include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/tracking/depth_integrity.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
+#include "rgbdslam/tracking/map_replica.h"
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/tracking/pose_estimate.h"
 #include "rgbdslam/tracking/pose_optimizer.h"
@@ -120,6 +121,7 @@ struct TrackerOptions {
   int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
+  LocalMapOptions local_map;        // which keyframes keep their pyramid (map_replica.h)
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
 };

@@ -1,0 +1,92 @@
+// The tracker's local map (MapReplica::updateLocalMap): which keyframes keep their pyramid,
+// what a cold keyframe keeps, and that a thawed one comes back as it was (up to JPEG).
+#include "rgbdslam/tracking/map_replica.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include "rgbdslam/synth/scene.h"
+
+namespace rgbdslam {
+namespace {
+
+class LocalMap : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const SyntheticScene scene(*parseSyntheticSpec("room,frames=90"));
+    camera = scene.camera();
+    replica = std::make_unique<MapReplica>(camera);
+    for (KeyframeId id = 0; id < 3; ++id) {
+      const RgbdFrame frame = scene.render(static_cast<size_t>(30 * id));
+      KeyframeData data;
+      data.id = id;
+      data.T_w_c = SE3(Mat3::Identity(), Vec3(static_cast<double>(id), 0, 0));  // 1 m apart
+      cv::cvtColor(frame.colour, data.grey, cv::COLOR_BGR2GRAY);
+      originals.push_back(data.grey.clone());
+      replica->addKeyframe(makeKeyframe(data, KeyframeBuildOptions{}));
+      NewPoint point;
+      point.point = MapPoint(MapPointData{100 + id, Vec3(static_cast<double>(id), 0, 2), id,
+                                          Eigen::Vector2d(320, 240), 0});
+      point.measurement = Measurement{100 + id, Eigen::Vector2d(320, 240), 0, 2.0};
+      replica->addProvisionalPoint(id, point);
+    }
+  }
+  const Keyframe& keyframe(KeyframeId id) const { return *replica->map().keyframe(id); }
+
+  PinholeCamera camera;
+  std::unique_ptr<MapReplica> replica;
+  std::vector<cv::Mat> originals;
+};
+
+TEST_F(LocalMap, KeyframesOutsideTheWindowGoColdAndTheirPointsAreNotSearched) {
+  const LocalMapChange change = replica->updateLocalMap({0}, 2, 10, 90);
+  EXPECT_EQ(change.frozen, 2);
+  EXPECT_EQ(replica->hotKeyframes(), 1);
+  EXPECT_FALSE(keyframe(0).cold());
+  for (KeyframeId id : {1, 2}) {
+    EXPECT_TRUE(keyframe(id).cold());
+    EXPECT_GT(keyframe(id).cold_grey.size(), 1000u);
+    EXPECT_LT(keyframe(id).cold_grey.size(), originals[id].total() / 2) << "JPEG, not raw";
+  }
+  std::vector<KeyframeView> views;
+  makeKeyframeViews(replica->map(), SE3(), &views);
+  ASSERT_EQ(views.size(), 3u);
+  EXPECT_TRUE(views[0].valid);
+  EXPECT_FALSE(views[1].valid);
+  EXPECT_FALSE(views[2].valid);
+  EXPECT_EQ(replica->map().numPoints(), 3u) << "cold keyframes keep their points";
+}
+
+TEST_F(LocalMap, ACameraThatComesBackThawsNearestFirstWithinTheBudget) {
+  replica->updateLocalMap({0}, 2, 10, 90);
+  for (PointSlot& slot : replica->slots()) slot.patch_level = 1;  // as if patches were cached
+  const LocalMapChange change = replica->updateLocalMap({2, 1}, 1, 10, 90);
+  EXPECT_EQ(change.thawed, 1);
+  EXPECT_EQ(change.left_cold, 1);
+  EXPECT_EQ(change.frozen, 1) << "keyframe 0 left the window";
+  EXPECT_FALSE(keyframe(2).cold());
+  EXPECT_TRUE(keyframe(1).cold());
+  ASSERT_EQ(keyframe(2).pyramid.numLevels(), kMaxLevels);
+  cv::Mat difference;
+  cv::absdiff(keyframe(2).grey(), originals[2], difference);
+  EXPECT_LT(cv::mean(difference)[0], 3.0) << "JPEG at quality 90";
+  for (const PointSlot& slot : replica->slots()) {
+    if (slot.source == &keyframe(2)) {
+      EXPECT_EQ(slot.patch_level, -1) << "patch cache of the old image";
+    } else if (slot.source == &keyframe(1)) {
+      EXPECT_EQ(slot.patch_level, 1);
+    }
+  }
+  replica->updateLocalMap({2, 1}, 1, 10, 90);
+  EXPECT_FALSE(keyframe(1).cold()) << "the rest of the window follows on the next call";
+}
+
+TEST_F(LocalMap, FreezingIsBoundedPerCall) {
+  const LocalMapChange change = replica->updateLocalMap({}, 2, 1, 90);
+  EXPECT_EQ(change.frozen, 1);
+  EXPECT_EQ(replica->hotKeyframes(), 2);
+}
+
+}  // namespace
+}  // namespace rgbdslam
