@@ -56,6 +56,16 @@ TEST_F(LocalMap, KeyframesOutsideTheWindowGoColdAndTheirPointsAreNotSearched) {
   EXPECT_FALSE(views[1].valid);
   EXPECT_FALSE(views[2].valid);
   EXPECT_EQ(replica->map().numPoints(), 3u) << "cold keyframes keep their points";
+  // From keyframe 1's pose all three points are in the image: the cold keyframes' points are
+  // not searched, but marked as waiting for their source (the tracker thaws those first).
+  const SE3 T_c_w = keyframe(1).T_c_w();
+  makeKeyframeViews(replica->map(), T_c_w, &views);
+  for (PointSlot& slot : replica->slots()) {
+    const bool projected = projectPoint(camera, T_c_w, views, ProjectionOptions{}, &slot);
+    const bool cold_source = slot.point->source_keyframe != 0;
+    EXPECT_EQ(slot.waits_for_source, cold_source) << "point " << slot.point->id;
+    EXPECT_EQ(projected, !cold_source) << "point " << slot.point->id;
+  }
 }
 
 TEST_F(LocalMap, ACameraThatComesBackThawsNearestFirstWithinTheBudget) {

@@ -18,6 +18,7 @@ void makeKeyframeViews(const Map& map, const SE3& T_c_w, std::vector<KeyframeVie
     const SE3 T_src_w = keyframe->T_c_w();
     const Mat3 R_src_w = T_src_w.rotationMatrix();
     view.valid = !keyframe->cold();  // a cold keyframe's points have no source image now
+    view.cold = keyframe->cold();
     view.R_cur_src = R_c_w * R_src_w.transpose();
     view.src_z_row = R_src_w.row(2);
     view.src_z_offset = T_src_w.translation().z();
@@ -45,6 +46,7 @@ bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
                   const std::vector<KeyframeView>& views, const ProjectionOptions& options,
                   PointSlot* slot) {
   slot->search_level = -1;
+  slot->waits_for_source = false;
   const MapPoint& point = *slot->point;
   slot->p_c = T_c_w * point.p_w;
   if (slot->p_c.z() < options.min_depth_m) return false;
@@ -53,6 +55,7 @@ bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
   if (!uv || !camera.inImage(*uv, options.margin_px)) return false;
   slot->uv = *uv;
   const auto kf = static_cast<size_t>(point.source_keyframe);
+  if (kf < views.size() && views[kf].cold) slot->waits_for_source = true;
   if (kf >= views.size() || !views[kf].valid) return false;
   const KeyframeView& view = views[kf];
   const double z_src = view.src_z_row.dot(point.p_w) + view.src_z_offset;

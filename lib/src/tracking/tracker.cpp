@@ -2,6 +2,7 @@
 #include "rgbdslam/tracking/depth_integrity.h"
 
 #include <algorithm>
+#include <map>
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -92,6 +93,7 @@ class Tracker::Impl {
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
   void updateLocalMap(const SE3& T_w_c, int max_thaws);
+  std::map<KeyframeId, int> waiting_sources_;  // cold source keyframe -> its points in view
   TrackResult trackNormally(const RgbdFrame& frame);
   SE3 predictPose() const;
   // Coarse stage: kIfMoving when the start pose predicts image motion (coarseWanted),
@@ -211,11 +213,20 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
 
 // The keyframes nearest 'T_w_c' hot, the rest cold (LocalMapOptions), at most 'max_thaws'
 // thawed now: the others of the window follow in the next frames.
+// Wanted first: the cold sources of the most points in view at the last projection (so
+// points the camera sees are not lost to the window), then the nearest keyframes.
 void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
   const LocalMapOptions& o = options_.local_map;
   if (o.keyframes <= 0 || replica_.map().numKeyframes() <= static_cast<size_t>(o.keyframes)) return;
-  replica_.updateLocalMap(replica_.map().nearestKeyframes(T_w_c, static_cast<size_t>(o.keyframes)),
-                          max_thaws, o.changes_per_frame, o.jpeg_quality);
+  std::vector<std::pair<int, KeyframeId>> in_view;
+  for (const auto& [id, points] : waiting_sources_) in_view.emplace_back(-points, id);
+  std::sort(in_view.begin(), in_view.end());
+  std::vector<KeyframeId> wanted;
+  for (const auto& [minus_points, id] : in_view) wanted.push_back(id);
+  for (KeyframeId id : replica_.map().nearestKeyframes(T_w_c, static_cast<size_t>(o.keyframes))) {
+    if (!waiting_sources_.count(id)) wanted.push_back(id);
+  }
+  replica_.updateLocalMap(wanted, max_thaws, o.changes_per_frame, o.jpeg_quality);
 }
 
 void Tracker::Impl::prepareFrame(const RgbdFrame& frame) {
@@ -560,8 +571,10 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
 void Tracker::Impl::projectAll(const SE3& T_c_w) {
   makeKeyframeViews(replica_.map(), T_c_w, &views_);
   visible_.clear();
+  waiting_sources_.clear();
   for (PointSlot& slot : replica_.slots()) {
     if (projectPoint(camera_, T_c_w, views_, options_.projection, &slot)) visible_.push_back(&slot);
+    if (slot.waits_for_source) ++waiting_sources_[slot.point->source_keyframe];
   }
 }
 

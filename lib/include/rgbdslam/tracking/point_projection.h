@@ -26,6 +26,7 @@ namespace rgbdslam {
 // the third row of its T_c_w (for the point's depth in the source camera).
 struct KeyframeView {
   bool valid = false;
+  bool cold = false;  // the keyframe has no pyramid now (map_replica.h): its points wait
   Mat3 R_cur_src = Mat3::Identity();
   Eigen::RowVector3d src_z_row = Eigen::RowVector3d::Zero();  // z_src = row . p_w + t_z
   double src_z_offset = 0.0;
@@ -45,6 +46,7 @@ struct PointSlot {
   Eigen::Matrix2d patch_A = Eigen::Matrix2d::Zero();
   int patch_level = -1;
   // Per frame, from projectPoint().
+  bool waits_for_source = false;  // in the image, but its source keyframe is cold
   Vec3 p_c = Vec3::Zero();
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // predicted pixel, level 0
   Eigen::Matrix2d A_cur_src = Eigen::Matrix2d::Identity();
