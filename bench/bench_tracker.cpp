@@ -5,7 +5,9 @@
 // ($RGBDSLAM_SHARED_DIR/data/tum_fr3_teddy_200, default /work/shared). The tracker runs
 // alone (no mapper). Each iteration tracks the whole sequence; the counters are the median
 // and 95th percentile of the per-frame TrackResult::track_ms over all iterations, and the
-// share of frames with a pose. Target: median <= 4 ms per 640x480 frame.
+// share of frames with a pose. Target: median <= 4 ms per 640x480 frame. Each sequence runs
+// with the depth integrity check on (argument 1, the default) and off (0): the check's cost
+// is the difference of the medians (target: at most 0.5 ms).
 // Run: taskset -c 0 build-track/bench/bench_tracker
 #include <benchmark/benchmark.h>
 
@@ -76,6 +78,8 @@ double percentile(std::vector<double> values, double p) {
 }
 
 void trackSequence(benchmark::State& state, const Sequence& sequence, const char* name) {
+  TrackerOptions options;
+  options.integrity.enabled = state.range(0) != 0;
   if (!sequence.error.empty() || sequence.frames.empty()) {
     state.SkipWithError(sequence.error.empty() ? "no frames" : sequence.error.c_str());
     return;
@@ -83,7 +87,7 @@ void trackSequence(benchmark::State& state, const Sequence& sequence, const char
   std::vector<double> times;
   size_t with_pose = 0, frames = 0;
   for (auto _ : state) {
-    Tracker tracker(sequence.camera, TrackerOptions{}, SlamMode::kDepthBa, 1);
+    Tracker tracker(sequence.camera, options, SlamMode::kDepthBa, 1);
     for (const RgbdFrame& frame : sequence.frames) {
       const TrackResult result = tracker.track(frame);
       times.push_back(result.track_ms);
@@ -98,8 +102,9 @@ void trackSequence(benchmark::State& state, const Sequence& sequence, const char
   state.counters["p95_ms"] = p95;
   state.counters["tracked"] = static_cast<double>(with_pose) / static_cast<double>(frames);
   state.SetItemsProcessed(static_cast<int64_t>(frames));
-  std::printf("%s: %zu frames, time per frame median %.2f ms, p95 %.2f ms, %.1f%% with a pose\n",
-              name, sequence.frames.size(), median, p95, 100.0 * with_pose / frames);
+  std::printf("%s, integrity check %s: %zu frames, time per frame median %.2f ms, p95 %.2f ms, "
+              "%.1f%% with a pose\n", name, options.integrity.enabled ? "on" : "off",
+              sequence.frames.size(), median, p95, 100.0 * with_pose / frames);
 }
 
 void BM_TrackSyntheticRoom(benchmark::State& state) { trackSequence(state, room(), "room"); }
@@ -107,6 +112,6 @@ void BM_TrackTumTeddy(benchmark::State& state) { trackSequence(state, teddy(), "
 
 }  // namespace
 
-BENCHMARK(BM_TrackSyntheticRoom)->Unit(benchmark::kMillisecond)->Iterations(3);
-BENCHMARK(BM_TrackTumTeddy)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_TrackSyntheticRoom)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_TrackTumTeddy)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK_MAIN();
