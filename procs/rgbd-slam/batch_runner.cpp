@@ -168,7 +168,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printPeakRss();
-  std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\n", percentile(track_ms_, 0.5), percentile(track_ms_, 0.95));
+  std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\ntrack_ms_p99 %.3f\ntrack_ms_max %.3f\n", percentile(track_ms_, 0.5),
+              percentile(track_ms_, 0.95), percentile(track_ms_, 0.99), percentile(track_ms_, 1.0));
   if (!groundtruth_) {
     std::printf("ate_rmse_m unknown (no ground truth)\n");
     return;

@@ -2,7 +2,6 @@
 #include "rgbdslam/tracking/depth_integrity.h"
 
 #include <algorithm>
-#include <map>
 #include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
@@ -93,7 +92,9 @@ class Tracker::Impl {
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
   void updateLocalMap(const SE3& T_w_c, int max_thaws);
-  std::map<KeyframeId, int> waiting_sources_;  // cold source keyframe -> its points in view
+  // Per keyframe id: points of which it is the source that the last projection put in the
+  // image (found or not, hot or cold source).
+  std::vector<int> points_in_view_;
   TrackResult trackNormally(const RgbdFrame& frame);
   SE3 predictPose() const;
   // Coarse stage: kIfMoving when the start pose predicts image motion (coarseWanted),
@@ -213,18 +214,20 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
 
 // The keyframes nearest 'T_w_c' hot, the rest cold (LocalMapOptions), at most 'max_thaws'
 // thawed now: the others of the window follow in the next frames.
-// Wanted first: the cold sources of the most points in view at the last projection (so
-// points the camera sees are not lost to the window), then the nearest keyframes.
+// Wanted first: the sources of the most points in view at the last projection, hot or cold
+// (so points the camera sees are not lost to the window), then the nearest keyframes.
 void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
   const LocalMapOptions& o = options_.local_map;
   if (o.keyframes <= 0 || replica_.map().numKeyframes() <= static_cast<size_t>(o.keyframes)) return;
   std::vector<std::pair<int, KeyframeId>> in_view;
-  for (const auto& [id, points] : waiting_sources_) in_view.emplace_back(-points, id);
+  for (size_t id = 0; id < points_in_view_.size(); ++id) {
+    if (points_in_view_[id] > 0) in_view.emplace_back(-points_in_view_[id], static_cast<KeyframeId>(id));
+  }
   std::sort(in_view.begin(), in_view.end());
   std::vector<KeyframeId> wanted;
   for (const auto& [minus_points, id] : in_view) wanted.push_back(id);
   for (KeyframeId id : replica_.map().nearestKeyframes(T_w_c, static_cast<size_t>(o.keyframes))) {
-    if (!waiting_sources_.count(id)) wanted.push_back(id);
+    if (static_cast<size_t>(id) >= points_in_view_.size() || points_in_view_[id] == 0) wanted.push_back(id);
   }
   replica_.updateLocalMap(wanted, max_thaws, o.changes_per_frame, o.jpeg_quality);
 }
@@ -571,10 +574,11 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
 void Tracker::Impl::projectAll(const SE3& T_c_w) {
   makeKeyframeViews(replica_.map(), T_c_w, &views_);
   visible_.clear();
-  waiting_sources_.clear();
+  points_in_view_.assign(views_.size(), 0);
   for (PointSlot& slot : replica_.slots()) {
-    if (projectPoint(camera_, T_c_w, views_, options_.projection, &slot)) visible_.push_back(&slot);
-    if (slot.waits_for_source) ++waiting_sources_[slot.point->source_keyframe];
+    const bool visible = projectPoint(camera_, T_c_w, views_, options_.projection, &slot);
+    if (visible) visible_.push_back(&slot);
+    if (visible || slot.waits_for_source) ++points_in_view_[static_cast<size_t>(slot.point->source_keyframe)];
   }
 }
 
