@@ -135,6 +135,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     }
     if (last.status != TrackResult::Status::kBadFrame) ++state_frames_[last.pose.state];
     inconsistent_frames_ += last.inconsistent;
+    depth_aided_frames_ += last.depth_aided;
     if (hasPose(last.status)) {
       trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
       pose_states_.push_back(last.pose.state);
@@ -166,6 +167,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     std::printf("frames_%s %ld\n", toString(state), it == state_frames_.end() ? 0L : it->second);
   }
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
+  std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printPeakRss();
   std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\ntrack_ms_p99 %.3f\ntrack_ms_max %.3f\n", percentile(track_ms_, 0.5),

@@ -52,6 +52,7 @@ class BatchRunner {
   std::vector<TrackingState> pose_states_;       // the state of each trajectory pose
   std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted
+  long depth_aided_frames_ = 0;   // frames whose pose depth held with too few points
   long bad_frames_ = 0;
   LossReport loss_;  // logged even with --quiet: losing tracking is an event, not progress
 };

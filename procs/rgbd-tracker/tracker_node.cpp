@@ -123,6 +123,7 @@ void TrackerNode::trackFrame(const Received& received) {
   if (hasPose(result.status)) ++counters_.poses;
   if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];
   counters_.inconsistent += result.inconsistent;
+  counters_.depth_aided += result.depth_aided;
   state_ = result.pose.state;
   result.pose.utime = frame->utime;
   result.pose.seq = frame->seq;
@@ -243,6 +244,7 @@ void TrackerNode::publishStatus() {
                      {"frames_dodgy", state_frames_[static_cast<size_t>(TrackingState::kDodgy)]},
                      {"frames_relocalised", state_frames_[static_cast<size_t>(TrackingState::kRelocalised)]},
                      {"frames_inconsistent", c.inconsistent},
+                     {"frames_depth_aided", c.depth_aided},
                      {"lost_episodes", loss_.episodes()},
                      {"relocalisations", loss_.relocalisations()},
                      {"bad_frames", c.bad_frames},
@@ -282,6 +284,7 @@ void TrackerNode::printSummary() const {
     std::printf("frames_%s %ld\n", toString(state), state_frames_[static_cast<size_t>(state)]);
   }
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
+  std::printf("frames_depth_aided %ld\n", c.depth_aided);
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",

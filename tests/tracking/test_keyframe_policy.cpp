@@ -88,6 +88,23 @@ TEST_F(KeyframePolicyTest, FewPointsFoundWithDepthGiveAKeyframeWhereverTheCamera
   EXPECT_FALSE(decide(translated(0.0)));
 }
 
+// A plain wall: a keyframe could not bring the missing points, so the few-points rule waits
+// for a view with corners; moving on still gives keyframes (their depth holds the pose).
+TEST_F(KeyframePolicyTest, FewPointsRuleWaitsWhereTheFrameHasNoCorners) {
+  options_.few_points = 60;
+  options_.few_points_min_frames = 3;
+  input_.frames_since_keyframe = 3;
+  input_.points_found = 5;
+  input_.points_from_depth = true;
+  input_.corners = 59;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.corners = 60;
+  EXPECT_TRUE(decide(translated(0.0)));
+  input_.corners = 0;
+  input_.frames_since_keyframe = options_.min_frames_between_keyframes;
+  EXPECT_TRUE(decide(translated(0.3)));  // beyond 0.1 x 2 m from every keyframe
+}
+
 TEST_F(KeyframePolicyTest, FewPointsFoundWithoutDepthHaveTheirOwnThresholdAndWait) {
   options_.few_points = 60;
   options_.few_points_min_frames = 3;

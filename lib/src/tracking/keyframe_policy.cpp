@@ -36,7 +36,9 @@ bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
   const int few_points = input.points_from_depth ? options.few_points : options.few_points_no_depth;
   const int few_points_min_frames = input.points_from_depth ? options.few_points_min_frames
                                                             : options.few_points_no_depth_min_frames;
-  if (input.points_found < few_points && input.frames_since_keyframe >= few_points_min_frames) {
+  const bool corners_to_gain = input.corners < 0 || input.corners >= few_points;
+  if (input.points_found < few_points && input.frames_since_keyframe >= few_points_min_frames &&
+      corners_to_gain) {
     return true;
   }
   if (input.frames_since_keyframe < options.min_frames_between_keyframes) return false;

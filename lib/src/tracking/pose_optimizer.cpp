@@ -11,6 +11,7 @@ namespace {
 
 constexpr double kMadToSigma = 1.4826;  // sigma of a Gaussian per median absolute deviation
 constexpr int kMinObservations = 3;     // 6 unknowns, 2 equations each
+constexpr double kExtraDamping = 1e-9;  // relative to the mean diagonal of J^T W J
 
 // Linearised residuals at the current pose, normalised by their sigmas.
 struct Linearisation {
@@ -21,6 +22,9 @@ struct Linearisation {
   std::vector<Eigen::Matrix<double, 1, 6>> Jd;
   std::vector<uint8_t> validd;
   std::vector<double> e2_2d, e2_depth;  // squared normalised errors of the valid ones
+  std::vector<double> r_extra;          // ScalarResiduals, normalised
+  std::vector<Eigen::Matrix<double, 1, 6>> J_extra;
+  std::vector<double> e2_extra;
 };
 
 void linearise(const PinholeCamera& camera, const SE3& T_c_w,
@@ -101,20 +105,27 @@ PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information) 
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,
                                  const PoseOptimizerOptions& options,
-                                 std::vector<uint8_t>* inlier) {
+                                 std::vector<uint8_t>* inlier, const ScalarResiduals* extra) {
   PoseOptimizerResult result;
   result.T_c_w = T_c_w_start;
   if (inlier) inlier->assign(observations.size(), 0);
-  if (static_cast<int>(observations.size()) < kMinObservations) return result;
+  if (!extra && static_cast<int>(observations.size()) < kMinObservations) return result;
   Linearisation lin;
   const double c2 = options.tukey_c * options.tukey_c;
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
     linearise(camera, result.T_c_w, observations, options, &lin);
-    if (static_cast<int>(lin.e2_2d.size()) < kMinObservations) return result;
+    if (extra) {
+      extra->linearise(result.T_c_w, &lin.r_extra, &lin.J_extra);
+      lin.e2_extra.clear();
+      for (double r : lin.r_extra) lin.e2_extra.push_back(r * r);
+    }
+    const int usable = static_cast<int>(lin.e2_2d.size() + lin.e2_extra.size());
+    if ((extra ? usable : static_cast<int>(lin.e2_2d.size())) < kMinObservations) return result;
     const bool capped = iteration >= options.free_scale_iterations;
     const double cap = capped ? options.max_robust_sigma : 0.0;
     const double cut2_2d = c2 * robustSigmaSquared(&lin.e2_2d, options.min_robust_sigma, cap);
     const double cut2_depth = c2 * robustSigmaSquared(&lin.e2_depth, options.min_robust_sigma, cap);
+    const double cut2_extra = c2 * robustSigmaSquared(&lin.e2_extra, options.min_robust_sigma, cap);
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
     int inliers_2d = 0, inliers_depth = 0;
@@ -137,10 +148,27 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
         }
       }
     }
+    int inliers_extra = 0;
+    Eigen::Matrix<double, 6, 6> H_extra = Eigen::Matrix<double, 6, 6>::Zero();
+    for (size_t i = 0; i < lin.r_extra.size(); ++i) {
+      const double w = tukeyWeight(lin.r_extra[i] * lin.r_extra[i], cut2_extra);
+      if (w <= 0.0) continue;
+      ++inliers_extra;
+      H_extra.noalias() += w * lin.J_extra[i].transpose() * lin.J_extra[i];
+      b.noalias() += (w * lin.r_extra[i]) * lin.J_extra[i].transpose();
+    }
     result.inliers_2d = inliers_2d;
     result.inliers_depth = inliers_depth;
-    if (inliers_2d < kMinObservations) return result;
-    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(H);
+    H += H_extra;
+    result.extra_residuals = static_cast<int>(lin.r_extra.size());
+    result.inliers_extra = inliers_extra;
+    if ((extra ? inliers_2d + inliers_extra : inliers_2d) < kMinObservations) return result;
+    // Extra residuals may leave directions unfixed (one plane fixes three of six): a tiny
+    // damping keeps the step in them at zero instead of undefined. The information matrix
+    // reported stays undamped, so the uncertainty says what is unfixed.
+    Eigen::Matrix<double, 6, 6> H_solve = H;
+    if (extra) H_solve.diagonal().array() += kExtraDamping * std::max(1.0, H.trace() / 6.0);
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(H_solve);
     if (solver.info() != Eigen::Success) return result;
     // Minimise sum w |r + J xi|^2: J^T W J xi = -J^T W r.
     const Vec6 xi = solver.solve(-b);
@@ -149,6 +177,7 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
     result.iterations = iteration + 1;
     result.ok = true;
     result.information = H;
+    result.extra_information = H_extra;
     // Converged: stop, unless the capped scale has yet to be tried (jump to it).
     if (xi.norm() < options.converged_step) {
       if (capped || options.max_robust_sigma <= 0.0 || iteration + 1 >= options.iterations) break;

@@ -1,8 +1,10 @@
 #include "rgbdslam/tracking/tracker.h"
+#include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -31,6 +33,8 @@ struct Attempt {
   double median_depth_m = 0.0;  // of the found inliers
   bool did_coarse = false;      // the coarse stage ran
   PoseUncertainty uncertainty;  // of the fine stage's pose (infinite when it failed)
+  bool depth_aided = false;     // the pose fit included point-to-plane against depth
+  int depth_inliers = 0;        // ...and this many surface samples agreed
 };
 
 // A fine-stage slot's search outcome, to restore an earlier attempt.
@@ -84,6 +88,7 @@ class Tracker::Impl {
     next_keyframe_id_ = 0;
     last_quality_ = 0.0;
     have_previous_sbi_ = false;
+    surfaces_.clear();
   }
 
  private:
@@ -130,6 +135,13 @@ class Tracker::Impl {
   // from the last good pose; the first that passes both checks is returned.
   std::optional<Attempt> retryConsistent(const SE3& predicted, const RgbdFrame& frame);
   TrackResult lostResult(const Attempt& attempt, std::string reason, bool inconsistent);
+  // Depth-aided tracking (depth_alignment.h): whether the attempt's points are too weak,
+  // and the joint fit of its found points and the nearest keyframes' surfaces. Returns the
+  // attempt unchanged when depth does not hold the pose either.
+  bool depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const;
+  Attempt alignWithDepth(const Attempt& attempt, const RgbdFrame& frame);
+  void rememberSurface(const Keyframe& keyframe);
+  int cornerCount() const;  // FAST corners of this frame, all levels
   std::string lossReason(const Attempt& attempt) const;
   // The pose fit's options: depth residuals only where the mode tracks with depth.
   static PoseOptimizerOptions poseOptions(const TrackerOptions& options, SlamMode mode) {
@@ -161,6 +173,9 @@ class Tracker::Impl {
   std::vector<DepthVerdict> integrity_verdicts_;
   // A point's depth record counts after this many checks at accepted poses.
   static constexpr int kDepthRecordMin = 3;
+  // Per keyframe: its surface samples for depth-aided tracking (depth modes; 20-30 kB).
+  std::unordered_map<KeyframeId, std::vector<SurfaceSample>> surfaces_;
+  std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
 
   // Per-frame buffers, reused.
   cv::Mat grey_;
@@ -271,6 +286,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
                    " points do not fix the pose)";
     return result;
   }
+  rememberSurface(*keyframe);
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (!isProvisionalPointOf(np.point.id, 0)) break;
@@ -318,6 +334,7 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
     attempt = betterOf(attempt, predicted, frame, Coarse::kNever);
   }
+  if (depthAidWanted(attempt, frame)) attempt = alignWithDepth(attempt, frame);
   if (isLost(attempt)) return lostResult(attempt, lossReason(attempt), false);
   if (const DepthIntegrity integrity = integrityOf(attempt, frame); !integrity.consistent) {
     frame_inconsistent_ = true;
@@ -325,8 +342,9 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
     if (!retried) return lostResult(attempt, "depth disagrees with the pose: " + integrity.describe(), true);
     attempt = *retried;
   }
-  const TrackingState state =
-      attempt.quality >= options_.quality.good ? TrackingState::kTracking : TrackingState::kDodgy;
+  const TrackingState state = attempt.quality >= options_.quality.good && !attempt.depth_aided
+                                  ? TrackingState::kTracking
+                                  : TrackingState::kDodgy;
   return accept(attempt, frame, state);
 }
 
@@ -395,6 +413,90 @@ std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, cons
   return std::nullopt;
 }
 
+bool Tracker::Impl::depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const {
+  return options_.depth_align.enabled && depthInTracking(mode_) && !frame.depth.empty() &&
+         !surfaces_.empty() &&
+         (attempt.found < options_.depth_align.below_points || !poseFixed(attempt.uncertainty));
+}
+
+Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& frame) {
+  const DepthAlignmentOptions& o = options_.depth_align;
+  anchors_.clear();
+  size_t used = 0;
+  for (KeyframeId id : replica_.map().nearestKeyframes(attempt.T_c_w.inverse(), 4 * static_cast<size_t>(o.keyframes))) {
+    const auto surface = surfaces_.find(id);
+    if (surface == surfaces_.end() || surface->second.empty()) continue;
+    appendAnchors(surface->second, replica_.map().keyframe(id)->T_w_c, &anchors_);
+    if (++used >= static_cast<size_t>(o.keyframes)) break;
+  }
+  if (anchors_.empty()) return attempt;
+  // The found points (inliers of the fine stage) with their depth, and the surfaces.
+  observations_.clear();
+  std::vector<PointSlot*> found;
+  for (PointSlot* slot : stage_) {
+    if (!slot->found) continue;
+    observations_.push_back({slot->point->p_w, slot->found_uv, slot->found_level,
+                             pose_options_.use_depth ? depthAt(frame, slot->found_uv) : 0.0});
+    found.push_back(slot);
+  }
+  const PointToPlaneResiduals planes(anchors_, frame, camera_, options_.pose.noise,
+                                     options_.keyframe_build.min_depth_m,
+                                     options_.keyframe_build.max_depth_m, o.max_incidence_deg);
+  // From the attempt's pose, and from the motion model's without the small-blurry-image
+  // rotation: an image that shows nothing (a plain wall, the lights out) misleads that
+  // rotation estimate, and the attempt's few points may not have corrected it.
+  PoseOptimizerResult fit =
+      optimisePose(camera_, attempt.T_c_w, observations_, pose_options_, &inliers_, &planes);
+  // The information the surfaces really give (honestInformation) replaces theirs in the fit's.
+  Eigen::Matrix<double, 6, 6> surfaces_excess =
+      fit.extra_information - planes.honestInformation(fit.extra_information, o.effective_samples, fit.inliers_extra);
+  const SE3 velocity_start = SE3::exp(options_.motion.velocity_damping * velocity_) * T_c_w_;
+  std::vector<uint8_t> other_inliers;
+  const PoseOptimizerResult other =
+      optimisePose(camera_, velocity_start, observations_, pose_options_, &other_inliers, &planes);
+  if (other.ok && (!fit.ok || other.inliers_extra + other.inliers_2d > fit.inliers_extra + fit.inliers_2d)) {
+    fit = other;
+    inliers_.swap(other_inliers);
+    surfaces_excess = other.extra_information -
+                      planes.honestInformation(other.extra_information, o.effective_samples, other.inliers_extra);
+  }
+  if (!fit.ok || fit.inliers_extra < o.min_inliers ||
+      fit.inliers_extra < o.min_inlier_ratio * fit.extra_residuals) {
+    return attempt;
+  }
+  Attempt aligned = attempt;
+  aligned.T_c_w = fit.T_c_w;
+  aligned.uncertainty = poseUncertainty(fit.information - surfaces_excess);
+  aligned.depth_aided = true;
+  aligned.depth_inliers = fit.inliers_extra;
+  aligned.found = 0;
+  depths_.clear();
+  for (size_t i = 0; i < found.size(); ++i) {
+    found[i]->found = inliers_[i] != 0;
+    aligned.found += found[i]->found;
+    if (found[i]->found) depths_.push_back((fit.T_c_w * found[i]->point->p_w).z());
+  }
+  // Too few points for their median depth: the surfaces' (the keyframe rule's scale).
+  if (depths_.size() < 3) {
+    depths_.clear();
+    for (const SurfaceAnchor& a : anchors_) depths_.push_back((fit.T_c_w * a.p_w).z());
+  }
+  aligned.median_depth_m = median(&depths_);
+  return aligned;
+}
+
+void Tracker::Impl::rememberSurface(const Keyframe& keyframe) {
+  if (!options_.depth_align.enabled || !depthInTracking(mode_)) return;
+  surfaces_[keyframe.id] =
+      sampleSurface(keyframe.depth, camera_, options_.pose.noise, options_.depth_align);
+}
+
+int Tracker::Impl::cornerCount() const {
+  size_t count = 0;
+  for (const LevelCorners& level : corners_) count += level.all.size();
+  return static_cast<int>(std::min<size_t>(count, INT_MAX));
+}
+
 std::string Tracker::Impl::lossReason(const Attempt& attempt) const {
   if (attempt.searched == 0) return "no map point in view";
   if (attempt.found < options_.quality.min_points_tracked) return std::to_string(attempt.found) + " points found";
@@ -434,6 +536,8 @@ bool Tracker::Impl::coarseWanted(const SE3& T_c_w_start) {
 }
 
 bool Tracker::Impl::isLost(const Attempt& attempt) const {
+  // Held by depth and points together: what counts is whether they fix the pose.
+  if (attempt.depth_aided) return !poseFixed(attempt.uncertainty);
   return attempt.searched == 0 || attempt.quality < options_.quality.lost ||
          attempt.found < options_.quality.min_points_tracked || !poseFixed(attempt.uncertainty);
 }
@@ -480,6 +584,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   result.pose.T_w_c = T_c_w_.inverse();
   result.pose.points_tracked = attempt.found;
   result.pose.quality = attempt.quality;
+  result.depth_aided = attempt.depth_aided;
   ++frames_since_keyframe_;
   const bool keyframe_allowed =
       state == TrackingState::kTracking ||
@@ -487,7 +592,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
        depthPointsAllowed(mode_, next_keyframe_id_));
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
-                                  depthPointsAllowed(mode_, next_keyframe_id_)};
+                                  depthPointsAllowed(mode_, next_keyframe_id_), cornerCount()};
   if (shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
@@ -657,6 +762,7 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
                                    provisionalPointId(data.id, 0));
   }
+  rememberSurface(*keyframe);
   keyframe->releaseMappingData();  // the mapper gets 'data'; the replica tracks with the pyramid
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {

@@ -49,6 +49,10 @@ struct KeyframePolicyInput {
   SE3 T_w_c;                        // this frame's pose
   int points_found = 0;             // map points found in this frame
   bool points_from_depth = false;   // a keyframe now would get points from measured depth
+  // Corners the frame offers (FAST, all levels; -1: unknown). Fewer than the few-points
+  // threshold: a keyframe here could not bring the points that are short (a plain wall), so
+  // the few-points rule waits; the distance and angle rule still applies.
+  int corners = -1;
 };
 
 // True if no keyframe is both within distance_ratio * median depth and within angle_deg,

@@ -57,11 +57,15 @@ struct PoseOptimizerResult {
   bool ok = false;        // false: too few usable observations or a singular system
   int inliers_2d = 0;     // 2-D residuals with a non-zero final weight
   int inliers_depth = 0;  // depth residuals with a non-zero final weight
+  int extra_residuals = 0;  // ScalarResiduals of the last iteration
+  int inliers_extra = 0;    // ...with a non-zero final weight
   int iterations = 0;     // iterations run
   // J^T W J of the last iteration in normalised units (residuals divided by their sigmas),
   // so its inverse is the pose covariance for the left perturbation xi = (v, w) [m, rad]
   // when the measurement sigmas are right. Zero when not ok.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  // The ScalarResiduals' share of 'information' (zero without them).
+  Eigen::Matrix<double, 6, 6> extra_information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 // Standard deviations of a pose from its information matrix: the largest over directions
@@ -72,12 +76,26 @@ struct PoseUncertainty {
 };
 PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information);
 
-// Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / sigmaDepth(d)) over T_c_w.
-// inlier (optional) receives one flag per observation: its 2-D residual kept a weight.
+// Further scalar residuals of the pose, re-linearised at every iteration (their data
+// association may change with the pose): normalised residuals (divided by their sigmas)
+// and their Jacobians for the left perturbation. They get their own robust scale, like the
+// depth residuals. E.g. point-to-plane against depth (depth_alignment.h).
+class ScalarResiduals {
+ public:
+  virtual ~ScalarResiduals() = default;
+  virtual void linearise(const SE3& T_c_w, std::vector<double>* r,
+                         std::vector<Eigen::Matrix<double, 1, 6>>* J) const = 0;
+};
+
+// Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / sigmaDepth(d)) (+ sum rho of
+// 'extra', if given) over T_c_w. inlier (optional) receives one flag per observation: its
+// 2-D residual kept a weight. Without 'extra' at least 3 observations are needed; with it,
+// what the residuals fix is up to the caller (see the information matrix).
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,
                                  const PoseOptimizerOptions& options,
-                                 std::vector<uint8_t>* inlier = nullptr);
+                                 std::vector<uint8_t>* inlier = nullptr,
+                                 const ScalarResiduals* extra = nullptr);
 
 // Tukey's biweight for a squared normalised error e2 and squared cut-off c2:
 // (1 - e2 / c2)^2 inside the cut-off, 0 outside.

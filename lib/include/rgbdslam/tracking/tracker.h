@@ -10,6 +10,9 @@
 //   tracking / dodgy / lost, and a frame whose found points do not fix the pose (its
 //   standard deviation from the fit) is lost too, and so is one whose pose the depth image
 //   contradicts (depth_integrity.h; after retries from the prediction and the last pose);
+//   where the points found are too few to fix the pose, the depth image joins the fit
+//   (point-to-plane against the nearest keyframes' surfaces, depth_alignment.h) and the
+//   frame is dodgy if that fixes it, lost if not;
 //   when lost, the relocaliser compares the
 //   small blurry image with every keyframe's and tries the best. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
@@ -26,6 +29,7 @@
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/model/point_creation.h"
 #include "rgbdslam/model/slam_mode.h"
+#include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/map_replica.h"
@@ -121,6 +125,7 @@ struct TrackerOptions {
   int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
+  DepthAlignmentOptions depth_align;  // depth where the points are too few (depth modes)
   LocalMapOptions local_map;        // which keyframes keep their pyramid (map_replica.h)
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
@@ -149,6 +154,9 @@ struct TrackResult {
   // The depth image contradicted this frame's first pose (DepthIntegrityOptions): tracked
   // again from the prediction and the last pose; lost if no attempt agreed with depth.
   bool inconsistent = false;
+  // The points found were too few to fix the pose, and the depth image held it with them
+  // (depth_alignment.h): the state is dodgy.
+  bool depth_aided = false;
   double track_ms = 0.0;                     // time spent in track() [ms]
 };
 
