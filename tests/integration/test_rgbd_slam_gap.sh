@@ -6,9 +6,8 @@
 # Measured 2026-11-22: 270/270 frames got a pose, 150/150 after the gap (the first at frame
 # 150), lost_frames 0, ATE 2.0 mm. Across the gap the camera moves 0.15 m and 17 deg; the
 # tracker's rotation estimate from the small blurry image bridges that, so it is never lost
-# and the relocaliser is not needed (test_rgbd_slam_covered.sh exercises it). (A 2 s gap,
-# drop=100-159, is lost for good: the camera
-# comes back 34 deg and 0.3 m from every keyframe and only moves away; not tested here.)
+# and the relocaliser is not needed (test_rgbd_slam_covered.sh exercises it). (A 2 s gap is
+# tested by test_rgbd_slam_relocalise_anywhere.sh.)
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.005          # measured 2.0 mm; the room test's bound
 MIN_POSES_AFTER_GAP=140    # of 150: room for a few frames of relocalisation elsewhere

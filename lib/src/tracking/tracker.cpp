@@ -1,6 +1,7 @@
 #include "rgbdslam/tracking/tracker.h"
 #include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
+#include "rgbdslam/tracking/feature_relocaliser.h"
 
 #include <algorithm>
 #include <chrono>
@@ -89,6 +90,7 @@ class Tracker::Impl {
     last_quality_ = 0.0;
     have_previous_sbi_ = false;
     surfaces_.clear();
+    keyframe_features_.clear();
   }
 
  private:
@@ -140,7 +142,12 @@ class Tracker::Impl {
   // attempt unchanged when depth does not hold the pose either.
   bool depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const;
   Attempt alignWithDepth(const Attempt& attempt, const RgbdFrame& frame);
-  void rememberSurface(const Keyframe& keyframe);
+  // What a keyframe leaves the tracker besides its pyramid (depth modes): surface samples
+  // (depth-aided tracking) and 3-D features (relocalisation from anywhere).
+  void rememberKeyframe(const Keyframe& keyframe);
+  // Relocalisation by features (feature_relocaliser.h) against the best-ranked keyframes.
+  std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame,
+                                              const std::vector<RelocalisationCandidate>& ranked);
   int cornerCount() const;  // FAST corners of this frame, all levels
   std::string lossReason(const Attempt& attempt) const;
   // The pose fit's options: depth residuals only where the mode tracks with depth.
@@ -171,11 +178,17 @@ class Tracker::Impl {
   std::vector<Vec3> integrity_points_;  // scratch: the points the check projects...
   std::vector<PointSlot*> integrity_slots_;  // ...their slots
   std::vector<DepthVerdict> integrity_verdicts_;
+  // A pose relocalised by features is tracked again from where it ended, this many times at
+  // most, while the quality stays above this fraction of the previous pass's.
+  static constexpr int kRelocaliseRefinePasses = 2;
+  static constexpr double kRelocaliseRefineKeep = 0.9;
   // A point's depth record counts after this many checks at accepted poses.
   static constexpr int kDepthRecordMin = 3;
   // Per keyframe: its surface samples for depth-aided tracking (depth modes; 20-30 kB).
   std::unordered_map<KeyframeId, std::vector<SurfaceSample>> surfaces_;
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
+  // Per keyframe: ORB features with depth for relocalisation (depth modes; ~22 kB).
+  std::unordered_map<KeyframeId, Features3d> keyframe_features_;
 
   // Per-frame buffers, reused.
   cv::Mat grey_;
@@ -286,7 +299,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
                    " points do not fix the pose)";
     return result;
   }
-  rememberSurface(*keyframe);
+  rememberKeyframe(*keyframe);
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (!isProvisionalPointOf(np.point.id, 0)) break;
@@ -349,8 +362,11 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
 }
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
-  std::vector<RelocalisationCandidate> candidates =
-      relocalisationCandidates(replica_.map(), sbi_, camera_, options_.relocalise_candidates);
+  const std::vector<RelocalisationCandidate> ranked = relocalisationCandidates(
+      replica_.map(), sbi_, camera_, std::max(options_.relocalise_candidates, options_.reloc_features.candidates));
+  std::vector<RelocalisationCandidate> candidates(
+      ranked.begin(), ranked.begin() + std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(ranked.size()),
+                                                               options_.relocalise_candidates));
   // The last good pose first: after a short disturbance the camera is often still near it.
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
   for (const RelocalisationCandidate& candidate : candidates) {
@@ -376,6 +392,10 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     if (!integrityOf(attempt, frame).consistent) continue;  // a wrong pose is worse than none
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
+  }
+  if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, ranked)) {
+    velocity_.setZero();
+    return accept(*attempt, frame, TrackingState::kRelocalised);
   }
   TrackResult result;
   result.status = TrackStatus::kLost;
@@ -409,6 +429,48 @@ std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, cons
   for (const SE3& start : {predicted, T_c_w_}) {
     const Attempt retry = trackFrom(start, frame, Coarse::kNever);
     if (!isLost(retry) && integrityOf(retry, frame).consistent) return retry;
+  }
+  return std::nullopt;
+}
+
+std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
+                                                           const std::vector<RelocalisationCandidate>& ranked) {
+  const FeatureRelocaliserOptions& o = options_.reloc_features;
+  if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || keyframe_features_.empty()) return std::nullopt;
+  const Features3d current = extractFeatures3d(
+      grey_, depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
+                           options_.keyframe_build.max_depth_m),
+      camera_, o);
+  for (size_t k = 0; k < ranked.size() && k < static_cast<size_t>(o.candidates); ++k) {
+    const auto features = keyframe_features_.find(ranked[k].keyframe);
+    const Keyframe* keyframe = replica_.map().keyframe(ranked[k].keyframe);
+    if (features == keyframe_features_.end() || !keyframe) continue;
+    const std::optional<FeaturePose> pose =
+        poseFromFeatures(current, features->second, keyframe->T_w_c, camera_, pose_options_, o);
+    if (!pose) continue;
+    // The features' pose is within the depth noise: the fine stage first, as from the last
+    // pose; short of a good result the coarse stage too, and the better is kept.
+    updateLocalMap(pose->T_w_c, options_.local_map.relocalise_thaws);
+    const SE3 start = pose->T_w_c.inverse();
+    Attempt attempt = trackFrom(start, frame, Coarse::kNever);
+    if (isLost(attempt) || attempt.quality < options_.quality.good) {
+      attempt = betterOf(attempt, start, frame, Coarse::kAlways);
+    }
+    if (isLost(attempt) || attempt.quality < options_.quality.good) continue;
+    // From a start centimetres off, one fine stage converges only part of the way (measured:
+    // 2.5 cm left after a 5 s cover in the room, taken out over the next two frames as
+    // jumps): once more from where it ended.
+    for (int pass = 0; pass < kRelocaliseRefinePasses; ++pass) {
+      saveOutcome(&outcome_);
+      const Attempt again = trackFrom(attempt.T_c_w, frame, Coarse::kNever);
+      if (isLost(again) || again.quality < kRelocaliseRefineKeep * attempt.quality) {
+        restoreOutcome(outcome_);
+        break;
+      }
+      attempt = again;
+    }
+    if (!integrityOf(attempt, frame).consistent) continue;
+    return attempt;
   }
   return std::nullopt;
 }
@@ -485,10 +547,14 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   return aligned;
 }
 
-void Tracker::Impl::rememberSurface(const Keyframe& keyframe) {
-  if (!options_.depth_align.enabled || !depthInTracking(mode_)) return;
-  surfaces_[keyframe.id] =
-      sampleSurface(keyframe.depth, camera_, options_.pose.noise, options_.depth_align);
+void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
+  if (!depthInTracking(mode_)) return;
+  if (options_.depth_align.enabled) {
+    surfaces_[keyframe.id] = sampleSurface(keyframe.depth, camera_, options_.pose.noise, options_.depth_align);
+  }
+  if (options_.reloc_features.enabled) {
+    keyframe_features_[keyframe.id] = extractFeatures3d(keyframe.grey(), keyframe.depth, camera_, options_.reloc_features);
+  }
 }
 
 int Tracker::Impl::cornerCount() const {
@@ -762,7 +828,7 @@ KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
                                    provisionalPointId(data.id, 0));
   }
-  rememberSurface(*keyframe);
+  rememberKeyframe(*keyframe);
   keyframe->releaseMappingData();  // the mapper gets 'data'; the replica tracks with the pyramid
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {

@@ -88,6 +88,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   depth_align.bind(r, s);
+  reloc_features.bind(r, s);
   local_map.bind(r, s);
   bindRules(this, r);
 }

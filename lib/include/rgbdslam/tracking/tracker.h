@@ -14,7 +14,9 @@
 //   (point-to-plane against the nearest keyframes' surfaces, depth_alignment.h) and the
 //   frame is dodgy if that fixes it, lost if not;
 //   when lost, the relocaliser compares the
-//   small blurry image with every keyframe's and tries the best. Finally the keyframe
+//   small blurry image with every keyframe's and tries the best; with depth, the best few
+//   keyframes' ORB features are matched to the frame's and give a pose by 3-D RANSAC
+//   (feature_relocaliser.h), from wherever the camera is in their view. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
 //   applyMap(update): a map version's content goes into the replica (map_replica.h); which
@@ -31,6 +33,7 @@
 #include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
+#include "rgbdslam/tracking/feature_relocaliser.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/map_replica.h"
 #include "rgbdslam/tracking/point_projection.h"
@@ -126,6 +129,7 @@ struct TrackerOptions {
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
   DepthAlignmentOptions depth_align;  // depth where the points are too few (depth modes)
+  FeatureRelocaliserOptions reloc_features;  // relocalisation from anywhere (depth modes)
   LocalMapOptions local_map;        // which keyframes keep their pyramid (map_replica.h)
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
