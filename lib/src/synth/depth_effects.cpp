@@ -64,33 +64,55 @@ void removeProjectorShadows(double f_b, const cv::Mat& hit_z, cv::Mat* depth_m) 
   }
 }
 
-// Nguyen et al. (2012) axial noise [m] at depth z [m] and incidence theta [rad].
-double nguyenAxialSigma(double z, double theta) {
-  const double t = std::min(theta, kMaxIncidenceRad);
-  const double ratio = t / (M_PI / 2 - t);
-  return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4) + 0.0001 / std::sqrt(z) * ratio * ratio;
+// What the depth model needs of the incidence angle theta, tabulated over cos(theta) in
+// kIncidenceBins steps (acos per pixel costs more than the rest of the model).
+constexpr int kIncidenceBins = 4096;
+struct IncidenceTerms {
+  float axial_angle;  // Nguyen's angular term 0.1 mm * theta^2 / (pi/2 - theta)^2 [m] (at 1 m)
+  float lateral_px;   // Nguyen's sigma_L = 0.8 + 0.035 theta / (pi/2 - theta) [px]
+  bool shiny_lost;    // a shiny surface loses the reading at this incidence
+};
+
+const std::array<IncidenceTerms, kIncidenceBins + 1>& incidenceTable() {
+  static const auto table = [] {
+    std::array<IncidenceTerms, kIncidenceBins + 1> t;
+    for (int k = 0; k <= kIncidenceBins; ++k) {
+      const double theta = std::min(std::acos(static_cast<double>(k) / kIncidenceBins), kMaxIncidenceRad);
+      const double ratio = theta / (M_PI / 2 - theta);
+      t[k] = IncidenceTerms{static_cast<float>(0.0001 * ratio * ratio),
+                            static_cast<float>(0.8 + 0.035 * ratio),
+                            theta < kShinyNormalRad || theta > kShinyGrazingRad};
+    }
+    return t;
+  }();
+  return table;
 }
 
-// Nguyen et al. (2012) lateral noise [px].
-double nguyenLateralSigmaPx(double theta) {
-  const double t = std::min(theta, kMaxIncidenceRad);
-  return 0.8 + 0.035 * t / (M_PI / 2 - t);
+inline const IncidenceTerms& incidenceTerms(float cos_theta) {
+  const int k = static_cast<int>(std::clamp(cos_theta, 0.f, 1.f) * kIncidenceBins + 0.5f);
+  return incidenceTable()[k];
 }
 
-double incidence(float cos_theta) { return std::acos(std::clamp(cos_theta, 0.f, 1.f)); }
+// Nearest integer (std::lround is a library call; this runs twice per pixel).
+inline int roundToInt(float x) { return static_cast<int>(std::floor(x + 0.5f)); }
+
+// Nguyen et al. (2012) axial noise [m] at depth z [m].
+inline double nguyenAxialSigma(double z, const IncidenceTerms& terms) {
+  return 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4) + terms.axial_angle / std::sqrt(z);
+}
 
 // Probability that a reading survives the material losses.
 double keepProbability(const SensorEffects& effects, const CleanFrame& clean, int u, int v,
-                       double z, double theta) {
-  const auto surface = static_cast<SyntheticSurface>(clean.surfaces.at<uint8_t>(v, u));
+                       double z, float cos_theta) {
+  const auto surface = static_cast<SyntheticSurface>(clean.surfaces.ptr<uint8_t>(v)[u]);
   if (effects.shiny_holes && surface == SyntheticSurface::kShiny &&
-      (theta < kShinyNormalRad || theta > kShinyGrazingRad)) {
+      incidenceTerms(cos_theta).shiny_lost) {
     return 0.0;
   }
   if (effects.dark_holes <= 0) return 1.0;
-  const cv::Vec3b bgr = clean.colour.at<cv::Vec3b>(v, u);
+  const uint8_t* bgr = clean.colour.ptr<uint8_t>(v) + 3 * u;
   const double grey = (bgr[0] + bgr[1] + bgr[2]) / (3.0 * 255.0);
-  const double signal = grey * std::cos(theta) / (z * z);
+  const double signal = grey * cos_theta / (z * z);
   return std::clamp((signal - effects.dark_holes) / effects.dark_holes, 0.0, 1.0);
 }
 
@@ -125,19 +147,19 @@ cv::Mat kinectDepthWithEffects(const KinectNoiseOptions& noise, const SensorEffe
       const bool keep = !sparse || keep_bits.next() < keep_below;
       int su = u, sv = v;  // the pixel the reading comes from (lateral noise)
       if (effects.nguyen_depth) {
-        const double sigma_px = nguyenLateralSigmaPx(incidence(clean.cos_incidence.at<float>(v, u)));
-        su = std::clamp(u + static_cast<int>(std::lround(sigma_px * normalFrom(lateral_bits.next()))),
-                        0, depth_m.cols - 1);
-        sv = std::clamp(v + static_cast<int>(std::lround(sigma_px * normalFrom(lateral_bits.next()))),
-                        0, depth_m.rows - 1);
+        const float sigma_px = incidenceTerms(clean.cos_incidence.ptr<float>(v)[u]).lateral_px;
+        su = std::clamp(u + roundToInt(sigma_px * normalFrom(lateral_bits.next())), 0,
+                        depth_m.cols - 1);
+        sv = std::clamp(v + roundToInt(sigma_px * normalFrom(lateral_bits.next())), 0,
+                        depth_m.rows - 1);
       }
       const double loss_draw = losses ? loss_bits.next() / 65536.0 : 0.0;
-      const double z = depth_m.at<float>(sv, su);
+      const double z = depth_m.ptr<float>(sv)[su];
       if (z <= 0 || !keep) continue;
-      const double theta = incidence(clean.cos_incidence.at<float>(sv, su));
-      if (losses && loss_draw >= keepProbability(effects, clean, su, sv, z, theta)) continue;
-      const double sigma =
-          effects.nguyen_depth ? nguyenAxialSigma(z, theta) : noise.sigma_coefficient * z * z;
+      const float cos_theta = clean.cos_incidence.ptr<float>(sv)[su];
+      if (losses && loss_draw >= keepProbability(effects, clean, su, sv, z, cos_theta)) continue;
+      const double sigma = effects.nguyen_depth ? nguyenAxialSigma(z, incidenceTerms(cos_theta))
+                                                : noise.sigma_coefficient * z * z;
       out[u] = rawReading(noise, fbs, z + sigma * n, depth_factor);
     }
   }
