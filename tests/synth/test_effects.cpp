@@ -82,7 +82,7 @@ TEST(SyntheticEffects, KeysRoundTripAndDefaultOff) {
   EXPECT_EQ(formatSyntheticSpec(each), spec);
   EXPECT_EQ(formatSyntheticSpec(parsedSpec("room,effects=all,exposure=0")),
             "room,auto_exposure=0.5,vignetting=0.5,shot_noise=0.05,"
-            "depth_noise=nguyen,edge_holes=1,ir_shadow=1,dark_holes=0.02,shiny_holes=1");
+            "depth_noise=nguyen,edge_holes=1,ir_shadow=1,dark_holes=0.01,shiny_holes=1");
   // The office has every effect on unless told otherwise.
   EXPECT_TRUE(parsedSpec("office").effects == SensorEffects::all());
   EXPECT_EQ(formatSyntheticSpec(parsedSpec("office")), "office");

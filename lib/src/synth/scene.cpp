@@ -452,7 +452,7 @@ SensorEffects SensorEffects::all() {
   e.nguyen_depth = true;
   e.edge_holes_px = 1;
   e.ir_shadow = true;
-  e.dark_holes = 0.02;
+  e.dark_holes = 0.01;
   e.shiny_holes = true;
   return e;
 }
