@@ -457,6 +457,21 @@ TEST(SyntheticOffice, HandHeldWalkOf5To9MillimetresPerFrameInsideTheRooms) {
   EXPECT_LT(max_rate, 45.0) << "deg/s";
 }
 
+TEST(SyntheticOffice, SurfacesStayBetweenHalfAMetreAndFourMetres) {
+  const SyntheticScene office(parsedSpec("office,effects=none,depth_sigma=0,quantise=0"));
+  for (size_t i = 0; i < office.numFrames(); i += 20) {
+    const cv::Mat z = office.render(i).depthMetres();
+    std::vector<float> depths;
+    for (auto it = z.begin<float>(); it != z.end<float>(); ++it) {
+      if (!std::isnan(*it)) depths.push_back(*it);
+    }
+    ASSERT_GT(depths.size(), z.total() / 2) << "frame " << i;
+    std::nth_element(depths.begin(), depths.begin() + depths.size() / 10, depths.end());
+    EXPECT_LT(depths[depths.size() / 10], 4.0f) << "frame " << i << ": nothing within 4 m";
+    EXPECT_GE(*std::min_element(depths.begin(), depths.end()), 0.5f) << "frame " << i;
+  }
+}
+
 TEST(SyntheticOffice, HasStretchesOfPlainWallsWithFewCorners) {
   const SyntheticScene office(parsedSpec("office"));
   const SyntheticScene room(parsedSpec("room"));
