@@ -105,7 +105,7 @@ struct KinectNoiseOptions {
 //    more than 5 % of the depth between 4-neighbours).
 //  - ir_shadow: no reading where the projector, baseline_m to the right (+x) of the IR
 //    camera, cannot see the surface: a per-row occlusion test in projector coordinates
-//    (rows are epipolar lines), so bands f b (1/z_far - 1/z_near) px wide appear left of
+//    (rows are epipolar lines), so bands f b (1/z_near - 1/z_far) px wide appear left of
 //    nearer edges.
 //  - dark_holes: a weak IR return is lost. Signal s = (grey / 255) cos(theta) / z^2 (1 for
 //    a white matte wall facing the sensor at 1 m); the reading is kept with probability
@@ -131,9 +131,6 @@ struct SensorEffects {
   // 1.3 m height keeps them, at 4 m it has none), shiny holes.
   static SensorEffects all();
   bool any() const { return *this != SensorEffects{}; }
-  bool anyImage() const {
-    return exposure_ms > 0 || auto_exposure_s > 0 || vignetting > 0 || shot_noise > 0;
-  }
   bool anyDepth() const {
     return nguyen_depth || edge_holes_px > 0 || ir_shadow || dark_holes > 0 || shiny_holes;
   }
