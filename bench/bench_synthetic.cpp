@@ -1,5 +1,6 @@
 // Frames per second of the synthetic renderer at 640x480 on one core (render() includes ray
-// casting, image noise and the Kinect depth model). Target: >= 30 frames/s for the room.
+// casting, image noise and the Kinect depth model, and with the sensor effects). Target:
+// >= 30 frames/s for the room.
 // Run: build/bench/bench_synthetic (items_per_second = frames/s).
 #include <benchmark/benchmark.h>
 
@@ -28,6 +29,20 @@ void renderFrames(benchmark::State& state, const std::string& spec) {
 void BM_RenderRoom(benchmark::State& state) { renderFrames(state, "room"); }
 void BM_RenderRoomSparse(benchmark::State& state) { renderFrames(state, "room,depth_fraction=0.3"); }
 void BM_RenderCorridor(benchmark::State& state) { renderFrames(state, "corridor"); }
+// The sensor effects (SensorEffects): all of them, then the blur alone (5 ray casts per
+// frame), the auto exposure alone (61 metering casts at 1/16 size) and the depth effects.
+void BM_RenderRoomAllEffects(benchmark::State& state) { renderFrames(state, "room,effects=all"); }
+void BM_RenderRoomBlur(benchmark::State& state) { renderFrames(state, "room,exposure=20"); }
+void BM_RenderRoomAutoExposure(benchmark::State& state) {
+  renderFrames(state, "room,auto_exposure=0.5");
+}
+void BM_RenderRoomDepthEffects(benchmark::State& state) {
+  renderFrames(state, "room,depth_noise=nguyen,edge_holes=1,ir_shadow=1,dark_holes=0.02");
+}
+void BM_RenderCorridorAllEffects(benchmark::State& state) {
+  renderFrames(state, "corridor,effects=all");
+}
+void BM_RenderOffice(benchmark::State& state) { renderFrames(state, "office"); }
 
 void BM_BuildCorridor(benchmark::State& state) {
   for (auto _ : state) {
@@ -41,6 +56,12 @@ void BM_BuildCorridor(benchmark::State& state) {
 BENCHMARK(BM_RenderRoom)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 BENCHMARK(BM_RenderRoomSparse)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_RenderCorridor)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_RenderRoomAllEffects)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_RenderRoomBlur)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_RenderRoomAutoExposure)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_RenderRoomDepthEffects)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_RenderCorridorAllEffects)->Unit(benchmark::kMillisecond)->MinTime(3.0);
+BENCHMARK(BM_RenderOffice)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 BENCHMARK(BM_BuildCorridor)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

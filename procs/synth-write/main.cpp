@@ -10,8 +10,8 @@ using namespace rgbdslam;
 
 int main(int argc, char** argv) {
   CommandLine cli("synth-write", "Writes a synthetic sequence as a TUM RGB-D directory.");
-  cli.positional("SCENE", "room, corridor or flight, with ,key=value options as in synth:SCENE "
-                          "(seed, frames, rate, depth_fraction, depth, ...)");
+  cli.positional("SCENE", "room, corridor, flight or office, with ,key=value options as in "
+                          "synth:SCENE (seed, frames, rate, depth_fraction, depth, effects, ...)");
   cli.positional("DIR", "output directory (created; existing files are overwritten)");
   addLcmUrlOption(cli);  // accepted like every process; nothing is sent
   if (Status s = cli.parse(argc, argv); !s) return usageError("synth-write", s.error());

@@ -98,6 +98,11 @@ void resampleThroughLens(const LensResampling& lens, CleanFrame* frame) {
             cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::remap(frame->surfaces, out.surfaces, lens.map_u, lens.map_v, cv::INTER_NEAREST,
             cv::BORDER_CONSTANT, cv::Scalar(static_cast<int>(SyntheticSurface::kNothing)));
+  for (auto [in, to] : {std::pair{&frame->hit_z, &out.hit_z},
+                        std::pair{&frame->cos_incidence, &out.cos_incidence}}) {
+    cv::remap(*in, *to, lens.map_u, lens.map_v, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+              cv::Scalar(0));
+  }
   *frame = std::move(out);
 }
 

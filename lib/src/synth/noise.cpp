@@ -8,40 +8,11 @@
 #include "world.h"
 
 namespace rgbdslam::synthetic {
-namespace {
-
-// Random streams (makeEngine 'stream'); 1 and 2 are the world's textures and trajectory.
-constexpr uint64_t kImageNoiseStream = 10;
-constexpr uint64_t kDepthNoiseStream = 11;
-constexpr uint64_t kDepthKeepStream = 12;
-
-// 16-bit random numbers, four from each 64-bit draw.
-class Bits16 {
- public:
-  explicit Bits16(std::mt19937_64 rng) : rng_(std::move(rng)) {}
-  uint32_t next() {
-    if (left_ == 0) word_ = rng_(), left_ = 4;
-    const uint32_t value = static_cast<uint32_t>(word_ & 0xffff);
-    word_ >>= 16;
-    --left_;
-    return value;
-  }
-
- private:
-  std::mt19937_64 rng_;
-  uint64_t word_ = 0;
-  int left_ = 0;
-};
-
-// A standard normal sample from 16 random bits (table of 4096 quantiles).
-inline float normalFrom(uint32_t bits16) { return normalTable()[bits16 >> 4]; }
 
 bool depthActive(const KinectNoiseOptions& noise, size_t index) {
   return noise.depth_enabled &&
          (noise.depth_frames < 0 || index < static_cast<size_t>(noise.depth_frames));
 }
-
-}  // namespace
 
 void addImageNoise(const KinectNoiseOptions& noise, uint64_t seed, size_t index,
                    cv::Mat* colour) {
@@ -83,18 +54,22 @@ cv::Mat kinectDepth(const KinectNoiseOptions& noise, uint64_t seed, size_t index
       const bool keep = !sparse || keep_bits.next() < keep_below;
       const double z = in[u];
       if (z <= 0 || !keep) continue;
-      double z_measured = z + noise.sigma_coefficient * z * z * n;
-      if (noise.quantise) {
-        // Rounded to the nearest step (a cast: std::round is a library call here).
-        const int64_t steps = static_cast<int64_t>(fbs / z_measured + 0.5);
-        if (steps < 1) continue;  // beyond the last disparity step (or negative)
-        z_measured = fbs / static_cast<double>(steps);
-      }
-      if (!(z_measured >= noise.min_range_m && z_measured <= noise.max_range_m)) continue;
-      out[u] = static_cast<uint16_t>(std::min(65535.0, z_measured * depth_factor + 0.5));
+      out[u] = rawReading(noise, fbs, z + noise.sigma_coefficient * z * z * n, depth_factor);
     }
   }
   return raw;
+}
+
+uint16_t rawReading(const KinectNoiseOptions& noise, double fbs, double z_measured,
+                    double depth_factor) {
+  if (noise.quantise) {
+    // Rounded to the nearest step (a cast: std::round is a library call here).
+    const int64_t steps = static_cast<int64_t>(fbs / z_measured + 0.5);
+    if (steps < 1) return 0;  // beyond the last disparity step (or negative)
+    z_measured = fbs / static_cast<double>(steps);
+  }
+  if (!(z_measured >= noise.min_range_m && z_measured <= noise.max_range_m)) return 0;
+  return static_cast<uint16_t>(std::min(65535.0, z_measured * depth_factor + 0.5));
 }
 
 }  // namespace rgbdslam::synthetic

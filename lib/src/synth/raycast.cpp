@@ -165,9 +165,18 @@ inline RayHit castRay(const float inv[3], const CulledBox* boxes,
   return hit;
 }
 
+// Where one pixel's results go.
+struct PixelOut {
+  uint8_t* bgr;
+  float* depth;
+  uint8_t* label;
+  float* hit_z;
+  float* cos_incidence;
+};
+
 // Colour (BGR) and label of a hit, writing depth only for surfaces that return it.
 inline void shadeHit(const World& world, float fx, const float d[3], const float inv[3],
-                     const RayHit& hit, uint8_t* bgr, float* depth, uint8_t* label) {
+                     const RayHit& hit, const PixelOut& out) {
   const CulledBox& b = *hit.box;
   int axis = 0;
   float entry = -std::numeric_limits<float>::max();
@@ -188,10 +197,15 @@ inline void shadeHit(const World& world, float fx, const float d[3], const float
   const float scale = 1.f / static_cast<float>(1 << level);
   const float albedo = sampleBilinear(texture.levels[level], x * scale, y * scale);
   for (int c = 0; c < 3; ++c) {
-    bgr[c] = static_cast<uint8_t>(std::min(255.f, albedo * face.gain[c] + 0.5f));
+    out.bgr[c] = static_cast<uint8_t>(std::min(255.f, albedo * face.gain[c] + 0.5f));
   }
-  *depth = box.surface == SyntheticSurface::kDiffuse ? hit.z : 0.f;
-  *label = static_cast<uint8_t>(box.surface);
+  const bool returns_depth =
+      box.surface == SyntheticSurface::kDiffuse || box.surface == SyntheticSurface::kShiny;
+  *out.depth = returns_depth ? hit.z : 0.f;
+  *out.label = static_cast<uint8_t>(box.surface);
+  *out.hit_z = hit.z;
+  // The face's normal is the hit axis: cos(theta) = |d_axis| / |d|.
+  *out.cos_incidence = std::abs(d[axis]) / std::sqrt(d2);
 }
 
 void renderTile(const World& world, const PinholeCamera& cam, const Mat3& R_w_c,
@@ -208,6 +222,8 @@ void renderTile(const World& world, const PinholeCamera& cam, const Mat3& R_w_c,
     uint8_t* bgr = out->colour.ptr<uint8_t>(v);
     float* depth = out->depth_m.ptr<float>(v);
     uint8_t* label = out->surfaces.ptr<uint8_t>(v);
+    float* hit_z = out->hit_z.ptr<float>(v);
+    float* cos_incidence = out->cos_incidence.ptr<float>(v);
     for (int u = tx * kTile; u < u_end; ++u) {
       const float xn = static_cast<float>((u - cam.cx) / cam.fx);
       float d[3], inv[3];
@@ -218,7 +234,8 @@ void renderTile(const World& world, const PinholeCamera& cam, const Mat3& R_w_c,
       }
       const RayHit hit = castRay(inv, lists.boxes.data(), candidates, count);
       if (!hit.box) continue;  // stays black, no depth, kNothing
-      shadeHit(world, fx, d, inv, hit, bgr + 3 * u, depth + u, label + u);
+      shadeHit(world, fx, d, inv, hit,
+               PixelOut{bgr + 3 * u, depth + u, label + u, hit_z + u, cos_incidence + u});
     }
   }
 }
@@ -233,6 +250,10 @@ void castRays(const World& world, const PinholeCamera& camera, const SE3& T_w_c,
   out->colour.setTo(cv::Scalar::all(0));
   out->depth_m.setTo(cv::Scalar(0));
   out->surfaces.setTo(cv::Scalar(static_cast<int>(SyntheticSurface::kNothing)));
+  out->hit_z.create(camera.height, camera.width, CV_32FC1);
+  out->cos_incidence.create(camera.height, camera.width, CV_32FC1);
+  out->hit_z.setTo(cv::Scalar(0));
+  out->cos_incidence.setTo(cv::Scalar(0));
   const TileLists lists = cullBoxes(world, camera, T_w_c);
   const Mat3 R_w_c = T_w_c.rotationMatrix();
   for (int ty = 0; ty < lists.tiles_y; ++ty) {

@@ -26,9 +26,15 @@ constexpr double kMaxMinutes = 120.0;                    // limit of the minutes
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
 constexpr int kMinImageSidePx = 32, kMaxImageSidePx = 4096;  // limits of the size key [px]
 constexpr int kCoveredGreyLevel = 8;                     // a covered lens' image [grey level]
+constexpr double kOfficeDefaultSeconds = 1240.0 / 30.0;   // 1240 frames at 30 Hz
+constexpr double kMaxAutoExposureLagS = 10.0;            // limit of auto_exposure [s]
+constexpr double kMaxShotNoise = 10.0;                   // limit of shot_noise [grey levels]
+constexpr int kMaxEdgeHolesPx = 10;                      // limit of edge_holes [px]
 constexpr const char* kKnownKeys =
     "seed, frames, minutes, rate, depth_fraction, depth, depth_frames, min_range, max_range, "
-    "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion, size, intrinsics";
+    "noise_sigma, depth_sigma, quantise, drop, every, cover, distortion, size, intrinsics, "
+    "effects, exposure, auto_exposure, vignetting, shot_noise, depth_noise, edge_holes, "
+    "ir_shadow, dark_holes, shiny_holes";
 
 PinholeCamera syntheticCamera() {
   PinholeCamera camera;
@@ -93,6 +99,42 @@ size_t parseColonList(const std::string& value, double* out, size_t max) {
   return count;
 }
 
+// Applies one key=value of the sensor effects; false if 'key' is not an effects key.
+bool applyEffectsKey(const std::string& key, const std::string& value, SensorEffects* e,
+                     Status* status) {
+  double number = 0;
+  const bool is_number = parseDouble(value, &number);
+  auto flag = [&](bool* target) {
+    if (value != "0" && value != "1") *status = badValue(key, value, "0 or 1");
+    *target = value == "1";
+  };
+  if (key == "effects") {
+    if (value != "all" && value != "none") *status = badValue(key, value, "all or none");
+    *e = value == "all" ? SensorEffects::all() : SensorEffects{};
+  } else if (key == "depth_noise") {
+    if (value != "kinect" && value != "nguyen") *status = badValue(key, value, "kinect or nguyen");
+    e->nguyen_depth = value == "nguyen";
+  } else if (key == "ir_shadow") {
+    flag(&e->ir_shadow);
+  } else if (key == "shiny_holes") {
+    flag(&e->shiny_holes);
+  } else if (key == "edge_holes") {
+    if (!parseInteger(value, &e->edge_holes_px)) *status = badValue(key, value, "pixels, an integer");
+  } else if (key == "exposure" || key == "auto_exposure" || key == "vignetting" ||
+             key == "shot_noise" || key == "dark_holes") {
+    if (!is_number) *status = badValue(key, value, "a number");
+    double* target = key == "exposure"        ? &e->exposure_ms
+                     : key == "auto_exposure" ? &e->auto_exposure_s
+                     : key == "vignetting"    ? &e->vignetting
+                     : key == "shot_noise"    ? &e->shot_noise
+                                              : &e->dark_holes;
+    *target = number;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 // Applies one key=value of a spec; range checks are left to validateSyntheticOptions.
 Status applyKey(const std::string& key, const std::string& value, SyntheticOptions* o) {
   KinectNoiseOptions& n = o->noise;
@@ -154,10 +196,68 @@ Status applyKey(const std::string& key, const std::string& value, SyntheticOptio
                      : key == "noise_sigma"    ? &n.image_noise_sigma
                                                : &n.sigma_coefficient;
     *target = number;
+  } else if (Status status; applyEffectsKey(key, value, &o->effects, &status)) {
+    return status;
   } else {
     return Error{"unknown key '" + key + "' (known: " + kKnownKeys + ")"};
   }
   return {};
+}
+
+// The effects keys of 'e' that differ from 'base' (the scene's default), for the spec.
+std::string formatEffects(const SensorEffects& e, const SensorEffects& base) {
+  if (e == base) return "";
+  if (e == SensorEffects::all()) return ",effects=all";
+  if (e == SensorEffects{}) return ",effects=none";
+  std::string spec;
+  auto add = [&spec](const char* key, const std::string& value) {
+    spec += std::string(",") + key + "=" + value;
+  };
+  if (e.exposure_ms != base.exposure_ms) add("exposure", formatDouble(e.exposure_ms));
+  if (e.auto_exposure_s != base.auto_exposure_s) {
+    add("auto_exposure", formatDouble(e.auto_exposure_s));
+  }
+  if (e.vignetting != base.vignetting) add("vignetting", formatDouble(e.vignetting));
+  if (e.shot_noise != base.shot_noise) add("shot_noise", formatDouble(e.shot_noise));
+  if (e.nguyen_depth != base.nguyen_depth) add("depth_noise", e.nguyen_depth ? "nguyen" : "kinect");
+  if (e.edge_holes_px != base.edge_holes_px) add("edge_holes", std::to_string(e.edge_holes_px));
+  if (e.ir_shadow != base.ir_shadow) add("ir_shadow", e.ir_shadow ? "1" : "0");
+  if (e.dark_holes != base.dark_holes) add("dark_holes", formatDouble(e.dark_holes));
+  if (e.shiny_holes != base.shiny_holes) add("shiny_holes", e.shiny_holes ? "1" : "0");
+  return spec;
+}
+
+Status validateEffects(const SensorEffects& e, double rate_hz) {
+  if (!(e.exposure_ms >= 0 && e.exposure_ms <= 1000.0 / rate_hz)) {
+    return Error{"exposure must be in [0, 1000 / rate] ms (at most the frame period), got " +
+                 formatDouble(e.exposure_ms)};
+  }
+  if (!(e.auto_exposure_s >= 0 && e.auto_exposure_s <= kMaxAutoExposureLagS)) {
+    return Error{"auto_exposure must be in [0, 10] s, got " + formatDouble(e.auto_exposure_s)};
+  }
+  if (!(e.vignetting >= 0 && e.vignetting <= 1)) {
+    return Error{"vignetting must be in [0, 1], got " + formatDouble(e.vignetting)};
+  }
+  if (!(e.shot_noise >= 0 && e.shot_noise <= kMaxShotNoise)) {
+    return Error{"shot_noise must be in [0, 10] grey levels, got " + formatDouble(e.shot_noise)};
+  }
+  if (e.edge_holes_px < 0 || e.edge_holes_px > kMaxEdgeHolesPx) {
+    return Error{"edge_holes must be in [0, 10] px, got " + std::to_string(e.edge_holes_px)};
+  }
+  if (!(e.dark_holes >= 0 && e.dark_holes <= 1)) {
+    return Error{"dark_holes must be in [0, 1], got " + formatDouble(e.dark_holes)};
+  }
+  return {};
+}
+
+const char* sceneName(SyntheticSceneKind scene) {
+  switch (scene) {
+    case SyntheticSceneKind::kRoom: return "room";
+    case SyntheticSceneKind::kCorridor: return "corridor";
+    case SyntheticSceneKind::kFlight: return "flight";
+    case SyntheticSceneKind::kOffice: return "office";
+  }
+  return "room";
 }
 
 std::string stampSeconds(int64_t utime) {
@@ -217,15 +317,16 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
     const std::string item = trim(spec.substr(start, comma - start));
     start = comma + 1;
     if (first) {
-      if (item == "room") {
-        options.scene = SyntheticSceneKind::kRoom;
-      } else if (item == "corridor") {
-        options.scene = SyntheticSceneKind::kCorridor;
-      } else if (item == "flight") {
-        options.scene = SyntheticSceneKind::kFlight;
-      } else {
-        return Error{where + "unknown scene '" + item + "' (expected room, corridor or flight)"};
+      bool known = false;
+      for (const auto kind : {SyntheticSceneKind::kRoom, SyntheticSceneKind::kCorridor,
+                              SyntheticSceneKind::kFlight, SyntheticSceneKind::kOffice}) {
+        if (item == sceneName(kind)) options.scene = kind, known = true;
       }
+      if (!known) {
+        return Error{where + "unknown scene '" + item +
+                     "' (expected room, corridor, flight or office)"};
+      }
+      options.effects = defaultEffects(options.scene);
       continue;
     }
     const size_t equals = item.find('=');
@@ -242,9 +343,7 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
 std::string formatSyntheticSpec(const SyntheticOptions& o) {
   const SyntheticOptions d;
   const KinectNoiseOptions& n = o.noise;
-  std::string spec = o.scene == SyntheticSceneKind::kRoom       ? "room"
-                     : o.scene == SyntheticSceneKind::kCorridor ? "corridor"
-                                                                : "flight";
+  std::string spec = sceneName(o.scene);
   auto add = [&spec](const char* key, const std::string& value) {
     spec += std::string(",") + key + "=" + value;
   };
@@ -283,7 +382,7 @@ std::string formatSyntheticSpec(const SyntheticOptions& o) {
   if (o.cover_first >= 0) {
     add("cover", std::to_string(o.cover_first) + "-" + std::to_string(o.cover_last));
   }
-  return spec;
+  return spec + formatEffects(o.effects, defaultEffects(o.scene));
 }
 
 Status validateSyntheticOptions(const SyntheticOptions& o) {
@@ -341,7 +440,32 @@ Status validateSyntheticOptions(const SyntheticOptions& o) {
   if (!(n.disparity_focal_px > 0 && n.baseline_m > 0 && n.disparity_step_px > 0)) {
     return Error{"disparity quantisation parameters must be > 0"};
   }
-  return {};
+  return validateEffects(o.effects, o.rate_hz);
+}
+
+SensorEffects SensorEffects::all() {
+  SensorEffects e;
+  e.exposure_ms = 20.0;
+  e.auto_exposure_s = 0.5;
+  e.vignetting = 0.5;
+  e.shot_noise = 0.05;
+  e.nguyen_depth = true;
+  e.edge_holes_px = 1;
+  e.ir_shadow = true;
+  e.dark_holes = 0.01;
+  e.shiny_holes = true;
+  return e;
+}
+
+bool SensorEffects::operator==(const SensorEffects& o) const {
+  return std::tie(exposure_ms, auto_exposure_s, vignetting, shot_noise, nguyen_depth,
+                  edge_holes_px, ir_shadow, dark_holes, shiny_holes) ==
+         std::tie(o.exposure_ms, o.auto_exposure_s, o.vignetting, o.shot_noise, o.nguyen_depth,
+                  o.edge_holes_px, o.ir_shadow, o.dark_holes, o.shiny_holes);
+}
+
+SensorEffects defaultEffects(SyntheticSceneKind scene) {
+  return scene == SyntheticSceneKind::kOffice ? SensorEffects::all() : SensorEffects{};
 }
 
 SyntheticScene::SyntheticScene(const SyntheticOptions& options)
@@ -349,7 +473,8 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options)
   assert(validateSyntheticOptions(options).ok());
   const double default_s = options.scene == SyntheticSceneKind::kRoom       ? kRoomDefaultSeconds
                            : options.scene == SyntheticSceneKind::kCorridor ? kCorridorDefaultSeconds
-                                                                            : kFlightDefaultSeconds;
+                           : options.scene == SyntheticSceneKind::kFlight   ? kFlightDefaultSeconds
+                                                                            : kOfficeDefaultSeconds;
   const double seconds = options.minutes > 0 ? 60.0 * options.minutes : default_s;
   num_frames_ = options.num_frames > 0
                     ? static_cast<size_t>(options.num_frames)
@@ -367,6 +492,10 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options)
     case SyntheticSceneKind::kFlight:
       world_ = std::make_shared<const synthetic::World>(
           synthetic::buildFlight(options.seed, duration_s));
+      break;
+    case SyntheticSceneKind::kOffice:
+      world_ = std::make_shared<const synthetic::World>(
+          synthetic::buildOffice(options.seed, duration_s));
       break;
   }
   if (camera_.hasDistortion()) {
@@ -397,27 +526,74 @@ RgbdFrame SyntheticScene::render(size_t i) const {
   RgbdFrame frame = renderPose(groundTruthPose(i), i);
   if (options_.covered(i)) {  // a hand over the lens: dark, noisy, no depth
     frame.colour.setTo(cv::Scalar::all(kCoveredGreyLevel));
-    synthetic::addImageNoise(options_.noise, options_.seed, i, &frame.colour);
+    addImageNoise(i, &frame.colour);
     frame.depth.setTo(0);
   }
   return frame;
 }
 
-RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {
-  synthetic::CleanFrame clean;
-  if (lens_) {
-    synthetic::castRays(*world_, lens_->canvas, T_w_c, &clean);
-    synthetic::resampleThroughLens(*lens_, &clean);
+double SyntheticScene::meteredGain(size_t i) const {
+  synthetic::CleanFrame small;
+  synthetic::castRays(*world_, synthetic::meteringCamera(camera_), groundTruthPose(i), &small);
+  return synthetic::meteredGainOf(small.colour);
+}
+
+double SyntheticScene::exposureGain(size_t i) const {
+  if (options_.effects.auto_exposure_s <= 0) return 1.0;
+  return synthetic::laggedGain(i, options_.rate_hz, options_.effects.auto_exposure_s,
+                               [this](size_t k) { return meteredGain(k); });
+}
+
+void SyntheticScene::addImageNoise(size_t i, cv::Mat* colour) const {
+  if (options_.effects.shot_noise > 0) {
+    synthetic::addSignalDependentNoise(options_.noise, options_.effects, options_.seed, i, colour);
   } else {
-    synthetic::castRays(*world_, camera_, T_w_c, &clean);
+    synthetic::addImageNoise(options_.noise, options_.seed, i, colour);
   }
-  synthetic::addImageNoise(options_.noise, options_.seed, i, &clean.colour);
+}
+
+// Motion blur: the colour is the mean of the sub-frames along the camera's motion over the
+// exposure, the trajectory's motion around frame i carried over to the pose T_w_c.
+void SyntheticScene::blurColour(const PinholeCamera& cast_camera, const SE3& T_w_c, size_t i,
+                                cv::Mat* colour) const {
+  const double t = static_cast<double>(i) / options_.rate_hz;
+  const SE3 T_c_w_frame = world_->trajectory.pose(t).inverse();
+  cv::Mat sum;
+  colour->convertTo(sum, CV_32FC3);  // the middle sub-frame (offset 0) is this pose
+  for (const double offset : synthetic::blurOffsets(options_.effects.exposure_ms)) {
+    if (offset == 0.0) continue;
+    synthetic::CleanFrame sub;
+    const SE3 T_w_sub = T_w_c * (T_c_w_frame * world_->trajectory.pose(t + offset));
+    synthetic::castRays(*world_, cast_camera, T_w_sub, &sub);
+    cv::Mat sub_float;
+    sub.colour.convertTo(sub_float, CV_32FC3);
+    sum += sub_float;
+  }
+  sum.convertTo(*colour, CV_8UC3, 1.0 / synthetic::kBlurSubFrames);
+}
+
+RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {
+  const SensorEffects& effects = options_.effects;
+  const PinholeCamera& cast_camera = lens_ ? lens_->canvas : camera_;
+  synthetic::CleanFrame clean;
+  synthetic::castRays(*world_, cast_camera, T_w_c, &clean);
+  if (effects.exposure_ms > 0) blurColour(cast_camera, T_w_c, i, &clean.colour);
+  if (effects.anyDepth()) {
+    synthetic::removeGeometricDepth(effects, options_.noise, cast_camera.fx, &clean);
+  }
+  if (lens_) synthetic::resampleThroughLens(*lens_, &clean);
   RgbdFrame frame;
   frame.utime = frameUtime(i);
   frame.seq = static_cast<int64_t>(i);
-  frame.colour = clean.colour;
-  frame.depth = synthetic::kinectDepth(options_.noise, options_.seed, i, clean.depth_m,
-                                       camera_.depth_factor);
+  // The effects' material losses need the clean colour: the noisy one is a copy then.
+  frame.colour = effects.any() ? clean.colour.clone() : clean.colour;
+  synthetic::applyExposureAndVignetting(effects, camera_, exposureGain(i), &frame.colour);
+  addImageNoise(i, &frame.colour);
+  frame.depth = effects.anyDepth()
+                    ? synthetic::kinectDepthWithEffects(options_.noise, effects, options_.seed, i,
+                                                        clean, camera_.depth_factor)
+                    : synthetic::kinectDepth(options_.noise, options_.seed, i, clean.depth_m,
+                                             camera_.depth_factor);
   frame.depth_scale = camera_.depth_factor;
   frame.camera_name = camera_.name;
   if (surfaces) *surfaces = clean.surfaces;

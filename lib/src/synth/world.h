@@ -4,10 +4,15 @@
 //  - layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
 //  - flight.cpp:   the flight: rooms joined by corridors and doors, and a scripted flight;
 //  - raycast.cpp:  exact ray casting of one pose into clean colour and depth;
+//  - office.cpp:   the office: two rooms with plain walls and a hand-held walk through them;
 //  - noise.cpp:    the Kinect error model and image noise on a clean frame;
+//  - effects.cpp:  the image effects of SensorEffects (blur, auto exposure, vignetting, shot
+//                  noise);
+//  - depth_effects.cpp: the depth effects of SensorEffects (Nguyen noise, holes);
 //  - scene.cpp:    the public API, spec parsing, TUM export, the FrameSource.
 // World frame z-up, metres. Everything random takes an explicit engine seeded from the seed.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <random>
@@ -29,6 +34,32 @@ inline double uniform(std::mt19937_64& rng, double lo, double hi) {
 }
 // Table of 4096 standard-normal quantiles (zero mean, unit variance), for fast noise.
 const std::array<float, 4096>& normalTable();
+// A standard normal sample from 16 random bits (the table's quantiles).
+inline float normalFrom(uint32_t bits16) { return normalTable()[bits16 >> 4]; }
+// 16-bit random numbers, four from each 64-bit draw.
+class Bits16 {
+ public:
+  explicit Bits16(std::mt19937_64 rng) : rng_(std::move(rng)) {}
+  uint32_t next() {
+    if (left_ == 0) word_ = rng_(), left_ = 4;
+    const uint32_t value = static_cast<uint32_t>(word_ & 0xffff);
+    word_ >>= 16;
+    --left_;
+    return value;
+  }
+
+ private:
+  std::mt19937_64 rng_;
+  uint64_t word_ = 0;
+  int left_ = 0;
+};
+// Random streams (makeEngine 'stream') of the sensor, one per purpose, drawn per frame; 1 and
+// 2 are the world's textures and trajectory.
+constexpr uint64_t kImageNoiseStream = 10;
+constexpr uint64_t kDepthNoiseStream = 11;
+constexpr uint64_t kDepthKeepStream = 12;
+constexpr uint64_t kDepthLateralStream = 13;  // Nguyen lateral displacement (u, v)
+constexpr uint64_t kDepthLossStream = 14;     // dark and shiny surfaces' lost readings
 
 // ---- textures
 struct NoiseOctave {
@@ -142,14 +173,19 @@ class WorldBuilder {
 World buildRoom(uint64_t seed, double duration_s);
 World buildCorridor(uint64_t seed, double duration_s);
 World buildFlight(uint64_t seed, double duration_s);
+World buildOffice(uint64_t seed, double duration_s);
 
 // ---- rendering
 // Exact images of one pose: colour without noise, camera-frame depth z [m] of surfaces that
 // return depth (0 elsewhere), and the SyntheticSurface label of each pixel.
+// Besides, for the depth effects: the depth of every hit (glass and black too) and the
+// cosine of the angle between the ray and the surface normal.
 struct CleanFrame {
-  cv::Mat colour;    // CV_8UC3 BGR
-  cv::Mat depth_m;   // CV_32FC1
-  cv::Mat surfaces;  // CV_8UC1
+  cv::Mat colour;         // CV_8UC3 BGR
+  cv::Mat depth_m;        // CV_32FC1
+  cv::Mat surfaces;       // CV_8UC1
+  cv::Mat hit_z;          // CV_32FC1, camera-frame z of any surface hit [m], 0: none
+  cv::Mat cos_incidence;  // CV_32FC1, cos(theta) in [0, 1], 0 where nothing is hit
 };
 void castRays(const World& world, const PinholeCamera& camera, const SE3& T_w_c,
               CleanFrame* out);
@@ -177,5 +213,53 @@ void addImageNoise(const KinectNoiseOptions& noise, uint64_t seed, size_t index,
                    cv::Mat* colour);
 cv::Mat kinectDepth(const KinectNoiseOptions& noise, uint64_t seed, size_t index,
                     const cv::Mat& depth_m, double depth_factor);
+// Steps 2, 3 and 5 of the Kinect model on a noisy depth [m]: quantisation (fbs = f b / s),
+// range, storage; 0: no reading.
+uint16_t rawReading(const KinectNoiseOptions& noise, double fbs, double z_measured,
+                    double depth_factor);
+// True if frame 'index' has depth at all (depth on, within depth_frames).
+bool depthActive(const KinectNoiseOptions& noise, size_t index);
+
+// ---- sensor effects (SensorEffects; effects.cpp and depth_effects.cpp)
+constexpr int kBlurSubFrames = 5;  // renders averaged per blurred frame (odd: the middle one is
+                                   // the frame's own pose)
+// Time offsets [s] of the sub-frames from the frame's time.
+std::array<double, kBlurSubFrames> blurOffsets(double exposure_ms);
+// The metering's target gain of a clean colour image, and the lagged gain of frame 'index'
+// given the target gain of any frame (clamped to frame 0 before it).
+double meteredGainOf(const cv::Mat& clean_colour);
+template <typename TargetOf>
+double laggedGain(size_t index, double rate_hz, double lag_s, const TargetOf& target_of);
+// A small camera (1/16 of the size, same field of view) for metering.
+PinholeCamera meteringCamera(const PinholeCamera& camera);
+// Exposure gain (clamped at 255), vignetting (for 'camera', the undistorted image geometry
+// the colour is in) and signal-dependent noise, in place.
+void applyExposureAndVignetting(const SensorEffects& effects, const PinholeCamera& camera,
+                                double gain, cv::Mat* colour);
+void addSignalDependentNoise(const KinectNoiseOptions& noise, const SensorEffects& effects,
+                             uint64_t seed, size_t index, cv::Mat* colour);
+// Geometric holes on a clean frame, before lens resampling (the projector's epipolar lines
+// are the rows of the ideal image): the edge band and IR shadows, by zeroing depth_m.
+void removeGeometricDepth(const SensorEffects& effects, const KinectNoiseOptions& noise,
+                          double fx, CleanFrame* frame);
+// The Kinect model with the depth effects: material losses, Nguyen noise, then as
+// kinectDepth (quantisation, range, sparsity, storage).
+cv::Mat kinectDepthWithEffects(const KinectNoiseOptions& noise, const SensorEffects& effects,
+                               uint64_t seed, size_t index, const CleanFrame& clean,
+                               double depth_factor);
+
+template <typename TargetOf>
+double laggedGain(size_t index, double rate_hz, double lag_s, const TargetOf& target_of) {
+  // exp(-dt/tau)-weighted mean of log targets over 4 tau: a first-order lag, truncated.
+  const double decay = std::exp(-1.0 / (rate_hz * lag_s));
+  const size_t window = static_cast<size_t>(std::ceil(4.0 * lag_s * rate_hz));
+  double weight = 1, sum_w = 0, sum = 0;
+  for (size_t k = 0; k <= window; ++k, weight *= decay) {
+    const size_t frame = index >= k ? index - k : 0;
+    sum += weight * std::log(target_of(frame));
+    sum_w += weight;
+  }
+  return std::exp(sum / sum_w);
+}
 
 }  // namespace rgbdslam::synthetic

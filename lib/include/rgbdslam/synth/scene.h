@@ -6,7 +6,9 @@
 // doors, a figure of eight; plain walls, glass, a dark corner, a hall beyond the depth
 // range; the floor plan is in lib/src/synth/flight.cpp), rendered by
 // analytic ray casting against axis-aligned boxes, with the Kinect error model of the paper
-// (sigma(d) = a d^2, range limits, disparity quantisation, holes).
+// (sigma(d) = a d^2, range limits, disparity quantisation, holes) and, behind their own keys,
+// the truer sensor of SensorEffects (motion blur, auto exposure, vignetting, shot noise,
+// Nguyen depth noise, depth holes at edges, in IR shadows, on dark and shiny surfaces).
 //
 // Why: the SLAM pipeline is checked end to end against exact poses; the capture process
 // publishes these frames like a device would.
@@ -40,7 +42,7 @@
 
 namespace rgbdslam {
 
-enum class SyntheticSceneKind { kRoom, kCorridor, kFlight };
+enum class SyntheticSceneKind { kRoom, kCorridor, kFlight, kOffice };
 
 // What a pixel sees (the optional label image of SyntheticScene::renderPose).
 enum class SyntheticSurface : uint8_t {
@@ -48,6 +50,7 @@ enum class SyntheticSurface : uint8_t {
   kDiffuse = 1,  // textured surface that returns depth
   kGlass = 2,    // glass: colour but no depth
   kBlack = 3,    // black, light-absorbing: dark colour and no depth
+  kShiny = 4,    // glossy (whiteboard, screen, lacquered desk): depth unless shiny_holes drops it
 };
 
 // The Kinect error model (paper eq. 17 and the sensor's disparity quantisation). Applied in
@@ -75,11 +78,72 @@ struct KinectNoiseOptions {
   double image_noise_sigma = 2.0;       // Gaussian noise on each colour channel [grey levels]
 };
 
+// The truer sensor (issue 12): effects that make synthetic runs fail where real ones do. Each
+// is off at its default value (0 / false), so a spec without these keys renders bit-identical
+// frames to the renderer without them; "effects=all" sets every one to the values of
+// SensorEffects::all(), "effects=none" turns all off. Models (docs/design.md, "The renderer's
+// sensor models"):
+//  - exposure_ms: motion blur. The colour image is the mean of kBlurSubFrames = 5 renders at
+//    t_i + exposure * ((k + 0.5) / 5 - 0.5), k = 0..4, along the continuous trajectory (the
+//    middle one is the frame's own pose and gives depth and labels). Costs 5 ray casts.
+//  - auto_exposure_s: a global gain g_i applied to the colour image (clamped at 255), a
+//    first-order lag with this time constant of the gain the metering asks for,
+//    target_grey / (mean grey of the clean image), limited to [1/4, 4]: log g_i is the
+//    exp(-dt/tau)-weighted mean of the log target gains of frames i, i-1, ... over 4 tau
+//    (frames before 0 count as frame 0), so any frame is rendered on its own.
+//  - vignetting: corner darkening, colour *= 1 - vignetting * (1 - cos^4 alpha), alpha the
+//    angle of the pixel's ray to the optical axis (1: the natural cos^4 law).
+//  - shot_noise: signal-dependent image noise, sigma^2 = noise_sigma^2 + shot_noise * I
+//    [grey levels^2], I the noise-free grey level (noise_sigma is then the read noise).
+//  - nguyen_depth: depth noise of Nguyen, Izadi and Lovell (2012) instead of sigma = a z^2:
+//    axial sigma_z = 1.2 mm + 1.9 mm (z - 0.4 m)^2 + 0.1 mm / sqrt(z) theta^2 / (pi/2 -
+//    theta)^2 (z in m, theta the angle between the ray and the surface normal, capped at
+//    88 deg), and lateral noise: the reading is taken from a pixel displaced by
+//    N(0, sigma_L^2) in u and v, sigma_L = 0.8 + 0.035 theta / (pi/2 - theta) [px]; then
+//    the disparity quantisation as before.
+//  - edge_holes_px: no reading within this many pixels of a depth discontinuity (a jump of
+//    more than 5 % of the depth between 4-neighbours).
+//  - ir_shadow: no reading where the projector, baseline_m to the right (+x) of the IR
+//    camera, cannot see the surface: a per-row occlusion test in projector coordinates
+//    (rows are epipolar lines), so bands f b (1/z_near - 1/z_far) px wide appear left of
+//    nearer edges.
+//  - dark_holes: a weak IR return is lost. Signal s = (grey / 255) cos(theta) / z^2 (1 for
+//    a white matte wall facing the sensor at 1 m); the reading is kept with probability
+//    clamp((s - dark_holes) / dark_holes, 0, 1), so s < dark_holes always loses it.
+//  - shiny_holes: kShiny surfaces lose depth at near-normal incidence (theta < 12 deg: the
+//    projector's pattern saturates in the specular highlight) and at grazing incidence
+//    (theta > 65 deg: the pattern is mirrored away). Off: they return depth like kDiffuse.
+struct SensorEffects {
+  double exposure_ms = 0;      // exposure time for motion blur [ms], 0: no blur; <= 1000 / rate
+  double auto_exposure_s = 0;  // auto-exposure lag time constant [s], 0: fixed gain 1; <= 10
+  double vignetting = 0;       // strength of the cos^4 falloff, in [0, 1]
+  double shot_noise = 0;       // shot-noise variance per grey level [grey levels], in [0, 10]
+  bool nguyen_depth = false;   // Nguyen et al. axial and lateral depth noise
+  int edge_holes_px = 0;       // band without depth beside depth edges [px], in [0, 10]
+  bool ir_shadow = false;      // no depth where the projector is occluded
+  double dark_holes = 0;       // IR signal threshold (see above), in [0, 1], 0: off
+  bool shiny_holes = false;    // kShiny surfaces lose depth at near-normal and grazing incidence
+
+  // Every effect on: 20 ms exposure (indoor light), 0.5 s lag, vignetting 0.5 (corners at
+  // ~70 %), shot noise 0.05 (sigma ~3.8 at grey 200 with read noise 2), Nguyen depth, a 1 px
+  // edge band, IR shadows, dark_holes 0.01 (an 11 % grey surface facing the sensor keeps
+  // every reading within 2.3 m and none beyond 3.3 m; a 43 % grey floor seen at 3 m from
+  // 1.3 m height keeps them, at 4 m it has none), shiny holes.
+  static SensorEffects all();
+  bool any() const { return *this != SensorEffects{}; }
+  bool anyDepth() const {
+    return nguyen_depth || edge_holes_px > 0 || ir_shadow || dark_holes > 0 || shiny_holes;
+  }
+  bool operator==(const SensorEffects& o) const;
+  bool operator!=(const SensorEffects& o) const { return !(*this == o); }
+};
+
 struct SyntheticOptions {
   SyntheticSceneKind scene = SyntheticSceneKind::kRoom;
   uint64_t seed = 1;     // everything random derives from it
   int num_frames = 0;    // 0: from minutes, else the scene's default length (room 600,
-                         // corridor 3300, flight 18000 frames: 20 s, 110 s, 10 min)
+                         // corridor 3300, flight 18000, office 1240 frames: 20 s, 110 s,
+                         // 10 min, 41 s)
   double minutes = 0;    // length in minutes (0: see num_frames; not with num_frames)
   double rate_hz = 30.0; // frame rate [Hz]
   // Frames drop_first..drop_last (indices, inclusive) are left out by the FrameSource, as if
@@ -106,6 +170,9 @@ struct SyntheticOptions {
   int width = 640, height = 480;
   std::array<double, 4> intrinsics{525.0, 525.0, 319.5, 239.5};
   KinectNoiseOptions noise;
+  // Off by default; parseSyntheticSpec gives the office SensorEffects::all() (see
+  // defaultEffects).
+  SensorEffects effects;
 
   // True if the FrameSource leaves frame i out.
   bool dropped(size_t i) const {
@@ -120,13 +187,22 @@ struct SyntheticOptions {
   }
 };
 
-// "room", "corridor" or "flight" followed by optional ",key=value" pairs: seed, frames,
-// minutes, rate,
+// The effects a spec of this scene starts from: none, except for the office.
+// Decision: the office has every effect on by default. It is new (no published figure
+// depends on its frames) and it exists to show where trackers fail on real sensors: plain
+// walls with noisy, holed depth. "office,effects=none" renders it clean.
+SensorEffects defaultEffects(SyntheticSceneKind scene);
+
+// "room", "corridor", "flight" or "office" followed by optional ",key=value" pairs: seed,
+// frames, minutes, rate,
 // depth_fraction, depth (on|off|first), depth_frames, min_range, max_range, noise_sigma
 // (image noise), depth_sigma (a), quantise (0|1), drop (FIRST-LAST frame indices, inclusive,
 // or one index N; see SyntheticOptions::drop_first), every (K >= 1), cover (FIRST-LAST or N,
 // like drop), distortion (K1:K2:P1:P2[:K3], colon-separated), size (WxH), intrinsics
-// (FX:FY:CX:CY). E.g.
+// (FX:FY:CX:CY); the sensor effects (SensorEffects, all off by default except in the
+// office): effects (all|none), exposure [ms], auto_exposure [s], vignetting, shot_noise,
+// depth_noise (kinect|nguyen), edge_holes [px], ir_shadow (0|1), dark_holes, shiny_holes
+// (0|1). Later keys override earlier ones ("effects=all,exposure=0"). E.g.
 // "room,seed=3,depth_fraction=0.3", "flight,minutes=2", "room,frames=300,drop=120-149", "room,every=2",
 // "room,cover=120-149", "room,distortion=0.2624:-0.9531:-0.0054:0.0026:1.1633".
 // An unknown key or bad value is an Error naming it.
@@ -135,7 +211,7 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec);
 std::string formatSyntheticSpec(const SyntheticOptions& options);
 // Checks ranges (rate > 0, 0 < min_range < max_range <= 13 m, depth_fraction in (0,1],
 // 0 <= drop_first <= drop_last or both -1, the same for cover, every >= 1, a distortion
-// that is invertible over the image, ...).
+// that is invertible over the image, the effects' ranges in SensorEffects, ...).
 Status validateSyntheticOptions(const SyntheticOptions& options);
 
 namespace synthetic {
@@ -169,6 +245,10 @@ class SyntheticScene {
   // As render(i) but from an arbitrary pose (noise and depth schedule of frame i). If
   // 'surfaces' is given it receives a CV_8UC1 image of SyntheticSurface values.
   RgbdFrame renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces = nullptr) const;
+  // The auto-exposure gain of frame i (1 without auto exposure), and the gain its metering
+  // asks for (target grey / mean grey of the clean image of frame i, within [1/4, 4]).
+  double exposureGain(size_t i) const;
+  double meteredGain(size_t i) const;
   // Writes rgb/, depth/ (16-bit PNG), rgb.txt, depth.txt and groundtruth.txt in the TUM
   // layout (file names are the timestamps in seconds with 6 decimals).
   Status writeTumDirectory(const std::string& dir) const;
@@ -181,6 +261,10 @@ class SyntheticScene {
   // With distortion: frames are ray-cast through an ideal pinhole camera onto a canvas that
   // covers the lens' field of view, then resampled into the distorted image.
   std::shared_ptr<const synthetic::LensResampling> lens_;
+
+  void addImageNoise(size_t i, cv::Mat* colour) const;
+  void blurColour(const PinholeCamera& cast_camera, const SE3& T_w_c, size_t i,
+                  cv::Mat* colour) const;
 };
 
 // A FrameSource that renders the frames on the fly, in order, leaving out the dropped ones
