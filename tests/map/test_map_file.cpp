@@ -14,7 +14,7 @@ namespace rgbdslam {
 namespace {
 
 // A small camera keeps the images (and the test) small.
-PinholeCamera smallCamera() {
+PinholeCamera mapFileTestCamera() {
   PinholeCamera camera;
   camera.name = "small";
   camera.width = 160, camera.height = 120;
@@ -26,14 +26,14 @@ PinholeCamera smallCamera() {
 
 // Keyframes 0, 1 and 3 (an id skipped, as a mapper skips lost keyframes) with textured
 // images and depth (some pixels without a reading), points seen from several of them.
-struct SampleMap {
+struct MapFileSample {
   std::vector<KeyframeData> keyframes;
   std::vector<MapPointData> points;
   Map map;
 };
 
-SampleMap makeSampleMap(const PinholeCamera& camera) {
-  SampleMap s;
+MapFileSample makeMapFileSample(const PinholeCamera& camera) {
+  MapFileSample s;
   std::mt19937 rng(7);
   std::uniform_int_distribution<int> grey(0, 255), raw(2000, 20000);
   const KeyframeId ids[] = {0, 1, 3};
@@ -79,18 +79,18 @@ SampleMap makeSampleMap(const PinholeCamera& camera) {
   return s;
 }
 
-std::vector<uint8_t> encoded(const SampleMap& s, const PinholeCamera& camera) {
+std::vector<uint8_t> encodedSample(const MapFileSample& s, const PinholeCamera& camera) {
   auto bytes = encodeMapFile(s.map, camera, SlamMode::kDepthInit);
   EXPECT_TRUE(bytes.ok()) << (bytes ? "" : bytes.error());
   return bytes ? *bytes : std::vector<uint8_t>{};
 }
 
-void writeBytes(const std::string& path, const std::vector<uint8_t>& bytes) {
+void writeRawFile(const std::string& path, const std::vector<uint8_t>& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
-void putU32(std::vector<uint8_t>* bytes, size_t at, uint32_t v) {
+void putFileU32(std::vector<uint8_t>* bytes, size_t at, uint32_t v) {
   for (int i = 0; i < 4; ++i) (*bytes)[at + i] = static_cast<uint8_t>(v >> (8 * i));
 }
 
@@ -98,8 +98,8 @@ void putU32(std::vector<uint8_t>* bytes, size_t at, uint32_t v) {
 class MapFileSaved : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_TRUE(saveMap(s.map, camera, SlamMode::kDepthInit, path).ok()); }
-  const PinholeCamera camera = smallCamera();
-  const SampleMap s = makeSampleMap(camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  const MapFileSample s = makeMapFileSample(camera);
   test::TempDir dir;
   const std::string path = dir.file("sample.map");
 };
@@ -143,7 +143,7 @@ TEST_F(MapFileSaved, RoundTripKeepsEveryField) {
 }
 
 TEST_F(MapFileSaved, SavingLeavesNoTemporaryFileAndReplacesAnOldMap) {
-  writeBytes(path, {'o', 'l', 'd'});
+  writeRawFile(path, {'o', 'l', 'd'});
   ASSERT_TRUE(saveMap(s.map, camera, SlamMode::kDepthBa, path).ok());
   auto replaced = loadMap(path, camera);
   ASSERT_TRUE(replaced.ok()) << replaced.error();
@@ -157,8 +157,8 @@ TEST_F(MapFileSaved, SavingLeavesNoTemporaryFileAndReplacesAnOldMap) {
 }
 
 TEST(MapFile, TruncatedFilesSayWhere) {
-  const PinholeCamera camera = smallCamera();
-  const std::vector<uint8_t> bytes = encoded(makeSampleMap(camera), camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  const std::vector<uint8_t> bytes = encodedSample(makeMapFileSample(camera), camera);
   for (size_t length : {size_t{0}, size_t{5}, size_t{8}, size_t{20}, size_t{24}, size_t{100}, bytes.size() / 2,
                         bytes.size() - 1}) {
     const std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + static_cast<long>(length));
@@ -174,8 +174,8 @@ TEST(MapFile, TruncatedFilesSayWhere) {
 }
 
 TEST(MapFile, AFlippedByteIsAChecksumMismatch) {
-  const PinholeCamera camera = smallCamera();
-  std::vector<uint8_t> bytes = encoded(makeSampleMap(camera), camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  std::vector<uint8_t> bytes = encodedSample(makeMapFileSample(camera), camera);
   bytes[bytes.size() / 3] ^= 0x10;
   auto loaded = decodeMapFile(bytes, "flipped.map");
   ASSERT_FALSE(loaded.ok());
@@ -183,8 +183,8 @@ TEST(MapFile, AFlippedByteIsAChecksumMismatch) {
 }
 
 TEST(MapFile, WrongMagicIsNotAMapFile) {
-  const PinholeCamera camera = smallCamera();
-  std::vector<uint8_t> bytes = encoded(makeSampleMap(camera), camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  std::vector<uint8_t> bytes = encodedSample(makeMapFileSample(camera), camera);
   bytes[0] = 'X';
   auto loaded = decodeMapFile(bytes, "other.bin");
   ASSERT_FALSE(loaded.ok());
@@ -199,9 +199,9 @@ TEST(MapFile, WrongMagicIsNotAMapFile) {
 }
 
 TEST(MapFile, ANewerVersionIsRefusedByNumber) {
-  const PinholeCamera camera = smallCamera();
-  std::vector<uint8_t> bytes = encoded(makeSampleMap(camera), camera);
-  putU32(&bytes, 8, kMapFileVersion + 1);
+  const PinholeCamera camera = mapFileTestCamera();
+  std::vector<uint8_t> bytes = encodedSample(makeMapFileSample(camera), camera);
+  putFileU32(&bytes, 8, kMapFileVersion + 1);
   auto loaded = decodeMapFile(bytes, "new.map");
   ASSERT_FALSE(loaded.ok());
   EXPECT_NE(loaded.error().find("version " + std::to_string(kMapFileVersion + 1) + " not supported"),
@@ -225,18 +225,18 @@ TEST_F(MapFileSaved, AnotherCameraIsRefusedWithBothDescribed) {
 // A valid checksum over wrong content (a writer's bug, or a deliberate edit) is still held
 // to every bound: counts beyond the bytes left, an unknown point.
 TEST(MapFile, ContentWithAValidChecksumIsStillChecked) {
-  const PinholeCamera camera = smallCamera();
-  const std::vector<uint8_t> good = encoded(makeSampleMap(camera), camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  const std::vector<uint8_t> good = encodedSample(makeMapFileSample(camera), camera);
   auto reseal = [](std::vector<uint8_t> bytes) {
     // Recomputes the header's CRC so that only the content check can fail.
     const uint32_t crc = static_cast<uint32_t>(crc32(0L, bytes.data() + 24, static_cast<uInt>(bytes.size() - 24)));
-    putU32(&bytes, 20, crc);
+    putFileU32(&bytes, 20, crc);
     return bytes;
   };
   // The point count (the last u32 before the points) claims far more than is there.
   const size_t points_at = good.size() - 30 * (8 + 24 + 8 + 4 + 16) - 4;
   std::vector<uint8_t> bytes = good;
-  putU32(&bytes, points_at, 1000000);
+  putFileU32(&bytes, points_at, 1000000);
   auto loaded = decodeMapFile(reseal(bytes), "count.map");
   ASSERT_FALSE(loaded.ok());
   EXPECT_NE(loaded.error().find("corrupt at byte " + std::to_string(points_at)), std::string::npos) << loaded.error();
@@ -251,8 +251,8 @@ TEST(MapFile, ContentWithAValidChecksumIsStillChecked) {
 // Bounded fuzzing: random truncations and flips, with and without a resealed checksum, give
 // an error or a map, never a crash (run under the sanitizers in CI).
 TEST(MapFile, RandomDamageNeverCrashes) {
-  const PinholeCamera camera = smallCamera();
-  const std::vector<uint8_t> good = encoded(makeSampleMap(camera), camera);
+  const PinholeCamera camera = mapFileTestCamera();
+  const std::vector<uint8_t> good = encodedSample(makeMapFileSample(camera), camera);
   std::mt19937 rng(11);
   std::uniform_int_distribution<size_t> any_byte(0, good.size() - 1);
   std::uniform_int_distribution<int> any_bit(0, 7);
@@ -265,7 +265,7 @@ TEST(MapFile, RandomDamageNeverCrashes) {
       for (int k = 0; k < 1 + trial % 4; ++k) bytes[any_byte(rng)] ^= static_cast<uint8_t>(1 << any_bit(rng));
     }
     if (trial % 2 == 1 && bytes.size() >= 24) {
-      putU32(&bytes, 20, static_cast<uint32_t>(crc32(0L, bytes.data() + 24, static_cast<uInt>(bytes.size() - 24))));
+      putFileU32(&bytes, 20, static_cast<uint32_t>(crc32(0L, bytes.data() + 24, static_cast<uInt>(bytes.size() - 24))));
     }
     auto loaded = decodeMapFile(bytes, "fuzz.map");
     if (!loaded.ok()) {

@@ -82,8 +82,10 @@ class MapFileReader {
   const std::string& error() const { return error_; }
   size_t left() const { return size_ - pos_; }
   size_t fileOffset() const { return base_ + pos_; }
-  void fail(const std::string& what) {
-    if (ok()) error_ = "corrupt at byte " + std::to_string(fileOffset()) + ": " + what;
+  void fail(const std::string& what) { failAt(fileOffset(), what); }
+  // 'file_offset': where the bad field starts.
+  void failAt(size_t file_offset, const std::string& what) {
+    if (ok()) error_ = "corrupt at byte " + std::to_string(file_offset) + ": " + what;
   }
 
   uint64_t unsignedLE(int n) {
@@ -110,18 +112,20 @@ class MapFileReader {
   }
   // A count whose entries take at least 'entry_bytes' each, at most 'limit'.
   uint32_t count(const char* what, uint32_t limit, size_t entry_bytes) {
+    const size_t at = fileOffset();
     const uint32_t n = u32();
     if (ok() && (n > limit || static_cast<uint64_t>(n) * entry_bytes > left())) {
-      fail(std::string(what) + " count " + std::to_string(n) + " exceeds the bytes left");
+      failAt(at, std::string(what) + " count " + std::to_string(n) + " exceeds the bytes left");
       return 0;
     }
     return ok() ? n : 0;
   }
   // A length-prefixed byte range, as a pointer into the payload.
   std::pair<const uint8_t*, size_t> blob(const char* what, size_t limit) {
+    const size_t at = fileOffset();
     const uint32_t n = u32();
     if (ok() && (n > limit || n > left())) {
-      fail(std::string(what) + " length " + std::to_string(n) + " exceeds the bytes left");
+      failAt(at, std::string(what) + " length " + std::to_string(n) + " exceeds the bytes left");
     }
     if (!ok()) return {nullptr, 0};
     const uint8_t* p = data_ + pos_;
@@ -141,13 +145,13 @@ class MapFileReader {
   std::string error_;
 };
 
-void writeCamera(MapFileWriter* w, const PinholeCamera& c) {
+void writeSavedCamera(MapFileWriter* w, const PinholeCamera& c) {
   w->str(c.name);
   w->i32(c.width), w->i32(c.height);
   for (double v : {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3, c.depth_factor}) w->f64(v);
 }
 
-PinholeCamera readCamera(MapFileReader* r) {
+PinholeCamera readSavedCamera(MapFileReader* r) {
   PinholeCamera c;
   c.name = r->str("camera name");
   c.width = r->i32(), c.height = r->i32();
@@ -161,13 +165,13 @@ PinholeCamera readCamera(MapFileReader* r) {
   return c;
 }
 
-void writePose(MapFileWriter* w, const SE3& T) {
+void writeSavedPose(MapFileWriter* w, const SE3& T) {
   for (int i = 0; i < 3; ++i) w->f64(T.translation()[i]);
   const Eigen::Quaterniond& q = T.rotation();
   for (double v : {q.x(), q.y(), q.z(), q.w()}) w->f64(v);
 }
 
-SE3 readPose(MapFileReader* r) {
+SE3 readSavedPose(MapFileReader* r) {
   Vec3 t;
   for (int i = 0; i < 3; ++i) t[i] = r->f64("a keyframe position");
   double q[4];
@@ -182,7 +186,7 @@ SE3 readPose(MapFileReader* r) {
 
 // The keyframe's metric depth (NaN = none) back in raw units: exact for readings that came
 // from raw units at this scale (float holds raw / scale to far better than half a unit).
-cv::Mat depthToRaw(const cv::Mat& metres, double scale) {
+cv::Mat metricDepthToRaw(const cv::Mat& metres, double scale) {
   cv::Mat raw(metres.size(), CV_16UC1);
   for (int v = 0; v < metres.rows; ++v) {
     const float* in = metres.ptr<float>(v);
@@ -195,16 +199,16 @@ cv::Mat depthToRaw(const cv::Mat& metres, double scale) {
   return raw;
 }
 
-Status writeKeyframe(MapFileWriter* w, const Keyframe& kf, const PinholeCamera& camera) {
+Status writeSavedKeyframe(MapFileWriter* w, const Keyframe& kf, const PinholeCamera& camera) {
   if (kf.cold()) return Error{"keyframe " + std::to_string(kf.id) + " holds no image (a cold tracker keyframe)"};
   w->i64(kf.id), w->i64(kf.utime);
-  writePose(w, kf.T_w_c);
+  writeSavedPose(w, kf.T_w_c);
   w->f64(kf.median_depth);
   w->blob(encodePng(kf.grey()));
   w->u8(kf.depth.empty() ? 0 : 1);
   if (!kf.depth.empty()) {
     w->f64(camera.depth_factor);
-    w->blob(compressDepth(depthToRaw(kf.depth, camera.depth_factor)));
+    w->blob(compressDepth(metricDepthToRaw(kf.depth, camera.depth_factor)));
   }
   // Id order, so that equal maps give equal files.
   std::map<PointId, Measurement> sorted(kf.measurements().begin(), kf.measurements().end());
@@ -215,11 +219,11 @@ Status writeKeyframe(MapFileWriter* w, const Keyframe& kf, const PinholeCamera& 
   return Status{};
 }
 
-bool pixelInImage(const Eigen::Vector2d& uv, const PinholeCamera& camera) {
+bool savedPixelInImage(const Eigen::Vector2d& uv, const PinholeCamera& camera) {
   return uv.x() >= 0 && uv.y() >= 0 && uv.x() <= camera.width - 1 && uv.y() <= camera.height - 1;
 }
 
-void readMeasurements(MapFileReader* r, const PinholeCamera& camera, KeyframeData* kf) {
+void readSavedMeasurements(MapFileReader* r, const PinholeCamera& camera, KeyframeData* kf) {
   const uint32_t n = r->count("measurement", kMapFileMaxMeasurements, kMapFileMeasurementBytes);
   kf->measurements.reserve(n);
   for (uint32_t i = 0; i < n && r->ok(); ++i) {
@@ -229,7 +233,7 @@ void readMeasurements(MapFileReader* r, const PinholeCamera& camera, KeyframeDat
     m.level = r->i32();
     m.depth = r->f64("a measurement depth");
     if (r->ok() && (m.point_id < 0 || m.level < 0 || m.level >= kMaxLevels || m.depth < 0 ||
-                    !pixelInImage(m.uv, camera))) {
+                    !savedPixelInImage(m.uv, camera))) {
       r->fail("measurement of point " + std::to_string(m.point_id) + " in keyframe " +
               std::to_string(kf->id) + " out of range");
     }
@@ -238,14 +242,14 @@ void readMeasurements(MapFileReader* r, const PinholeCamera& camera, KeyframeDat
 }
 
 // One keyframe; 'previous' is the last keyframe's id (ids increase).
-void readKeyframe(MapFileReader* r, const PinholeCamera& camera, KeyframeId previous, LoadedMap* map) {
+void readSavedKeyframe(MapFileReader* r, const PinholeCamera& camera, KeyframeId previous, LoadedMap* map) {
   KeyframeData kf;
   kf.id = r->i64();
   if (r->ok() && (kf.id <= previous || kf.id >= int64_t{1} << 40)) {
     r->fail("keyframe id " + std::to_string(kf.id) + " not increasing or out of range");
   }
   kf.utime = r->i64();
-  kf.T_w_c = readPose(r);
+  kf.T_w_c = readSavedPose(r);
   const double median_depth = r->f64("a keyframe's median depth");
   const size_t grey_at = r->fileOffset();
   const auto [grey, grey_size] = r->blob("grey image", r->left());
@@ -266,13 +270,13 @@ void readKeyframe(MapFileReader* r, const PinholeCamera& camera, KeyframeId prev
       else kf.depth = *image;
     }
   }
-  readMeasurements(r, camera, &kf);
+  readSavedMeasurements(r, camera, &kf);
   if (!r->ok()) return;
   map->keyframes.push_back(std::move(kf));
   map->median_depths.push_back(median_depth);
 }
 
-void readPoints(MapFileReader* r, const PinholeCamera& camera, LoadedMap* map) {
+void readSavedPoints(MapFileReader* r, const PinholeCamera& camera, LoadedMap* map) {
   const uint32_t n = r->count("point", kMapFileMaxPoints, kMapFilePointBytes);
   map->points.reserve(n);
   // Source keyframes are looked up by id: keyframes are in id order.
@@ -282,6 +286,7 @@ void readPoints(MapFileReader* r, const PinholeCamera& camera, LoadedMap* map) {
     return it != map->keyframes.end() && it->id == id;
   };
   for (uint32_t i = 0; i < n && r->ok(); ++i) {
+    const size_t at = r->fileOffset();
     MapPointData p;
     p.id = r->i64();
     for (int k = 0; k < 3; ++k) p.p_w[k] = r->f64("a point position");
@@ -290,9 +295,9 @@ void readPoints(MapFileReader* r, const PinholeCamera& camera, LoadedMap* map) {
     p.uv.x() = r->f64("a point's pixel"), p.uv.y() = r->f64("a point's pixel");
     if (!r->ok()) return;
     const bool increasing = map->points.empty() || p.id > map->points.back().id;
-    if (p.id < 0 || !increasing || p.level < 0 || p.level >= kMaxLevels || !pixelInImage(p.uv, camera) ||
+    if (p.id < 0 || !increasing || p.level < 0 || p.level >= kMaxLevels || !savedPixelInImage(p.uv, camera) ||
         p.p_w.cwiseAbs().maxCoeff() > kMapFileMaxCoordinate || !hasKeyframe(p.source_keyframe)) {
-      r->fail("point " + std::to_string(p.id) + " out of range, not in id order, or its source keyframe " +
+      r->failAt(at, "point " + std::to_string(p.id) + " out of range, not in id order, or its source keyframe " +
               std::to_string(p.source_keyframe) + " is missing");
       return;
     }
@@ -301,7 +306,7 @@ void readPoints(MapFileReader* r, const PinholeCamera& camera, LoadedMap* map) {
 }
 
 // Every measurement names a point of the file.
-void checkMeasuredPoints(MapFileReader* r, const LoadedMap& map) {
+void checkSavedMeasuredPoints(MapFileReader* r, const LoadedMap& map) {
   for (const KeyframeData& kf : map.keyframes) {
     for (const Measurement& m : kf.measurements) {
       const auto it = std::lower_bound(map.points.begin(), map.points.end(), m.point_id,
@@ -316,7 +321,7 @@ void checkMeasuredPoints(MapFileReader* r, const LoadedMap& map) {
   }
 }
 
-Expected<std::vector<uint8_t>> readWholeFile(const std::string& path) {
+Expected<std::vector<uint8_t>> readMapFileBytes(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) return Error{"cannot open map file " + path + ": " + std::strerror(errno)};
   struct stat info {};
@@ -340,7 +345,7 @@ Expected<std::vector<uint8_t>> readWholeFile(const std::string& path) {
   return bytes;
 }
 
-Status writeFully(int fd, const std::vector<uint8_t>& bytes) {
+Status writeMapFileBytes(int fd, const std::vector<uint8_t>& bytes) {
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
@@ -376,11 +381,11 @@ std::string describeCamera(const PinholeCamera& c) {
 
 Expected<std::vector<uint8_t>> encodeMapFile(const Map& map, const PinholeCamera& camera, SlamMode mode) {
   MapFileWriter payload;
-  writeCamera(&payload, camera);
+  writeSavedCamera(&payload, camera);
   payload.str(slamModeName(mode));
   payload.u32(static_cast<uint32_t>(map.numKeyframes()));
   for (const auto& [id, kf] : map.keyframes()) {
-    if (Status s = writeKeyframe(&payload, *kf, camera); !s) return Error{s.error()};
+    if (Status s = writeSavedKeyframe(&payload, *kf, camera); !s) return Error{s.error()};
   }
   std::map<PointId, const MapPoint*> points;
   for (const auto& [id, p] : map.points()) points[id] = &p;
@@ -428,7 +433,7 @@ Expected<LoadedMap> decodeMapFile(const std::vector<uint8_t>& bytes, const std::
 
   MapFileReader r(payload, present, kMapFileHeaderBytes);
   LoadedMap map;
-  map.camera = readCamera(&r);
+  map.camera = readSavedCamera(&r);
   const std::string mode = r.str("mode");
   if (r.ok()) {
     if (auto parsed = parseSlamMode(mode)) map.mode = *parsed;
@@ -436,10 +441,10 @@ Expected<LoadedMap> decodeMapFile(const std::vector<uint8_t>& bytes, const std::
   }
   const uint32_t keyframes = r.count("keyframe", kMapFileMaxKeyframes, 8 + 8 + 56 + 8 + 4 + 1 + 4);
   for (uint32_t i = 0; i < keyframes && r.ok(); ++i) {
-    readKeyframe(&r, map.camera, map.keyframes.empty() ? -1 : map.keyframes.back().id, &map);
+    readSavedKeyframe(&r, map.camera, map.keyframes.empty() ? -1 : map.keyframes.back().id, &map);
   }
-  readPoints(&r, map.camera, &map);
-  if (r.ok()) checkMeasuredPoints(&r, map);
+  readSavedPoints(&r, map.camera, &map);
+  if (r.ok()) checkSavedMeasuredPoints(&r, map);
   if (r.ok() && r.left() != 0) r.fail(std::to_string(r.left()) + " bytes after the points");
   if (!r.ok()) return Error{name + ": " + r.error()};
   return map;
@@ -451,7 +456,7 @@ Status saveMap(const Map& map, const PinholeCamera& camera, SlamMode mode, const
   const std::string temporary = path + ".tmp-" + std::to_string(::getpid());
   const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return Error{"cannot create " + temporary + ": " + std::strerror(errno)};
-  Status written = writeFully(fd, *bytes);
+  Status written = writeMapFileBytes(fd, *bytes);
   if (written && ::fsync(fd) != 0) written = Error{std::strerror(errno)};
   if (::close(fd) != 0 && written) written = Error{std::strerror(errno)};
   if (written && ::rename(temporary.c_str(), path.c_str()) != 0) written = Error{std::strerror(errno)};
@@ -463,7 +468,7 @@ Status saveMap(const Map& map, const PinholeCamera& camera, SlamMode mode, const
 }
 
 Expected<LoadedMap> loadMap(const std::string& path, const PinholeCamera& expected) {
-  auto bytes = readWholeFile(path);
+  auto bytes = readMapFileBytes(path);
   if (!bytes) return Error{bytes.error()};
   auto map = decodeMapFile(*bytes, path);
   if (!map) return map;
