@@ -19,8 +19,13 @@ std::string LossReport::update(const TrackResult& result) {
     ++lost_run_;
   } else if (result.status == Status::kRelocalised) {
     ++relocalisations_;
-    std::snprintf(line, sizeof(line), "frame %ld: relocalised after %ld lost frames (lost at frame %ld, %d points found)",
-                  seq, lost_run_, lost_since_seq_, result.pose.points_tracked);
+    if (lost_since_seq_ < 0) {  // no loss before: a tracker started lost, in a loaded map
+      std::snprintf(line, sizeof(line), "frame %ld: localised in the loaded map (%d points found)", seq,
+                    result.pose.points_tracked);
+    } else {
+      std::snprintf(line, sizeof(line), "frame %ld: relocalised after %ld lost frames (lost at frame %ld, %d points found)",
+                    seq, lost_run_, lost_since_seq_, result.pose.points_tracked);
+    }
     lost_since_seq_ = -1, lost_run_ = 0;
   } else if (result.status == Status::kTracked || result.status == Status::kInitialised) {
     lost_since_seq_ = -1, lost_run_ = 0;

@@ -3,7 +3,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <iostream>
 
@@ -20,6 +22,26 @@ constexpr long kProgressEveryFrames = 100;  // progress line period when not on 
 bool hasPose(TrackResult::Status status) {
   return status == TrackResult::Status::kInitialised || status == TrackResult::Status::kTracked ||
          status == TrackResult::Status::kRelocalised;
+}
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The map to start from, checked against this run's camera and mode; none without --load-map.
+Expected<std::optional<LoadedMap>> loadStartMap(const BatchOptions& options, const PinholeCamera& camera,
+                                                double* load_ms) {
+  if (options.load_map.empty()) return std::optional<LoadedMap>();
+  const auto start = std::chrono::steady_clock::now();
+  auto loaded = loadMap(options.load_map, camera);
+  if (!loaded) return Error{"--load-map: " + loaded.error()};
+  const SlamMode mode = *parseSlamMode(options.config.slam->mode);
+  if (loaded->mode != mode) {
+    return Error{"--load-map: " + options.load_map + " was made in mode " + slamModeName(loaded->mode) +
+                 "; this run's mode is " + slamModeName(mode) + " (--mode)"};
+  }
+  *load_ms = msSince(start);
+  return std::optional<LoadedMap>(std::move(*loaded));
 }
 
 double percentile(std::vector<double> values, double q) {
@@ -55,6 +77,15 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   if (!seed || *seed < 0 || *seed > 0xffffffffL) return Error{"--link-seed must be 0 to 4294967295"};
   o.link.loss = *loss, o.link.delay_ms = *delay, o.link.seed = static_cast<uint32_t>(*seed);
   if (o.link.imperfect() && !o.deterministic) return Error{"--link-loss and --link-delay-ms need --deterministic"};
+  o.save_map = cli.has("save-map") ? cli.get("save-map") : "";
+  o.load_map = cli.has("load-map") ? cli.get("load-map") : "";
+  o.localise_only = cli.has("localise-only");
+  if (o.localise_only && o.load_map.empty()) return Error{"--localise-only needs --load-map FILE (the map to localise in)"};
+  // Found out at the start, not after the whole run.
+  const std::filesystem::path save_dir = std::filesystem::path(o.save_map).parent_path();
+  if (!o.save_map.empty() && !save_dir.empty() && !std::filesystem::is_directory(save_dir)) {
+    return Error{"the folder of --save-map " + o.save_map + " does not exist"};
+  }
   return o;
 }
 
@@ -84,18 +115,33 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
   } else {
     groundtruth = groundTruthFor(options.source);
   }
-  return std::unique_ptr<BatchRunner>(
-      new BatchRunner(std::move(options), camera, std::move(*source), std::move(groundtruth)));
+  double load_ms = 0.0;
+  auto start_map = loadStartMap(options, camera, &load_ms);
+  if (!start_map) return Error{start_map.error()};
+  const LoadedMap* loaded = *start_map ? &**start_map : nullptr;
+  auto runner = std::unique_ptr<BatchRunner>(
+      new BatchRunner(std::move(options), camera, std::move(*source), std::move(groundtruth), loaded));
+  runner->map_load_ms_ = load_ms;
+  return runner;
 }
 
 BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
-                         std::unique_ptr<FrameSource> source, std::optional<Trajectory> groundtruth)
+                         std::unique_ptr<FrameSource> source, std::optional<Trajectory> groundtruth,
+                         const LoadedMap* start_map)
     : options_(std::move(options)), camera_(std::move(camera)), source_(std::move(source)),
       groundtruth_(std::move(groundtruth)) {
   std::cerr << "rgbd-slam: " << source_->describe() << ", camera " << camera_.name << ", "
             << (options_.deterministic ? "deterministic" : "concurrent mapper") << "\n"
             << "configuration:\n" << options_.config.registry->describe();
-  slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic, options_.link);
+  if (start_map) {
+    std::cerr << "rgbd-slam: starting from " << options_.load_map << " (" << start_map->keyframes.size()
+              << " keyframes, " << start_map->points.size() << " points)"
+              << (options_.localise_only ? ", localising only" : "") << "\n";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic, options_.link,
+                                       SlamStart{start_map, options_.localise_only});
+  map_start_ms_ = msSince(start);
 }
 
 void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
@@ -113,6 +159,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
   Trajectory trajectory;
   TrackResult last;
   long frames = 0;
+  const auto run_start = std::chrono::steady_clock::now();
   while (!stop && (options_.max_frames == 0 || frames < options_.max_frames)) {
     FrameResult input = source_->next();
     if (input.status == FrameResult::Status::kEnd) break;
@@ -136,6 +183,10 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     if (last.status != TrackResult::Status::kBadFrame) ++state_frames_[last.pose.state];
     inconsistent_frames_ += last.inconsistent;
     depth_aided_frames_ += last.depth_aided;
+    if (hasPose(last.status) && first_pose_ms_ < 0) {
+      first_pose_frame_ = frames;
+      first_pose_ms_ = msSince(run_start);
+    }
     if (hasPose(last.status)) {
       trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
       pose_states_.push_back(last.pose.state);
@@ -149,8 +200,32 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
   showProgress(last, true);
   const Status written = writeTumTrajectory(options_.output, trajectory);
   if (!written) std::cerr << "rgbd-slam: error: " << written.error() << "\n";
+  const bool saved = saveMapIfAsked();
   printSummary(trajectory);
-  return (!written || bad_frames_ > 0) ? 1 : 0;
+  return (!written || !saved || bad_frames_ > 0) ? 1 : 0;
+}
+
+bool BatchRunner::saveMapIfAsked() {
+  if (options_.save_map.empty()) return true;
+  const auto start = std::chrono::steady_clock::now();
+  const Status saved = saveMap(slam_->mapper().map(), camera_, *parseSlamMode(options_.config.slam->mode),
+                               options_.save_map);
+  map_save_ms_ = msSince(start);
+  if (!saved) {
+    std::cerr << "rgbd-slam: error: " << saved.error() << "\n";
+    return false;
+  }
+  std::error_code error;
+  map_saved_bytes_ = static_cast<long>(std::filesystem::file_size(options_.save_map, error));
+  return true;
+}
+
+void BatchRunner::printMapFileSummary() const {
+  if (!options_.load_map.empty()) {
+    std::printf("map_load_ms %.1f\nmap_start_ms %.1f\nfirst_pose_frame %ld\nfirst_pose_ms %.1f\n", map_load_ms_,
+                map_start_ms_, first_pose_frame_, first_pose_ms_);
+  }
+  if (!options_.save_map.empty()) std::printf("map_saved_bytes %ld\nmap_save_ms %.1f\n", map_saved_bytes_, map_save_ms_);
 }
 
 void BatchRunner::printSummary(const Trajectory& trajectory) const {
@@ -169,6 +244,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
+  printMapFileSummary();
   printPeakRss();
   std::printf("track_ms_median %.3f\ntrack_ms_p95 %.3f\ntrack_ms_p99 %.3f\ntrack_ms_max %.3f\n", percentile(track_ms_, 0.5),
               percentile(track_ms_, 0.95), percentile(track_ms_, 0.99), percentile(track_ms_, 1.0));

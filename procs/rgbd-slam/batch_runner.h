@@ -27,6 +27,9 @@ struct BatchOptions {
   std::string groundtruth_path;            // empty: the source's own
   SlamConfig config;                       // the SLAM options and their registry
   LinkOptions link;                        // deterministic: the simulated link (perfect by default)
+  std::string save_map;                    // map file written at the end; empty: none
+  std::string load_map;                    // map file to start from; empty: a new map
+  bool localise_only = false;              // with load_map: add nothing to it
 
   static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
 };
@@ -39,7 +42,9 @@ class BatchRunner {
 
  private:
   BatchRunner(BatchOptions options, PinholeCamera camera, std::unique_ptr<FrameSource> source,
-              std::optional<Trajectory> groundtruth);
+              std::optional<Trajectory> groundtruth, const LoadedMap* start_map);
+  bool saveMapIfAsked();
+  void printMapFileSummary() const;
   void showProgress(const TrackResult& result, bool final_line);
   void printSummary(const Trajectory& trajectory) const;
 
@@ -54,6 +59,11 @@ class BatchRunner {
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted
   long depth_aided_frames_ = 0;   // frames whose pose depth held with too few points
   long bad_frames_ = 0;
+  // Map files (printed only when --load-map or --save-map is given).
+  double map_load_ms_ = 0.0, map_start_ms_ = 0.0, map_save_ms_ = 0.0;
+  long map_saved_bytes_ = 0;
+  long first_pose_frame_ = 0;    // frames read up to and including the first with a pose
+  double first_pose_ms_ = -1.0;  // from the start of the run to that pose [ms]; -1: none
   LossReport loss_;  // logged even with --quiet: losing tracking is an event, not progress
 };
 

@@ -22,6 +22,9 @@ CommandLine makeCommandLine() {
   addSlamConfigOptions(cli);
   cli.option("groundtruth", "FILE", "ground truth in TUM format", "the source's own, if any");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");
+  cli.option("save-map", "FILE", "at the end, save the mapper's map to FILE (docs/design.md, \"Map files\"; written whole or not at all)");
+  cli.option("load-map", "FILE", "start from the map in FILE (made with this camera and mode) and extend it; the first frames relocalise in it");
+  cli.flag("localise-only", "with --load-map: track in the loaded map only; no keyframes are added and the map is not changed");
   cli.flag("quiet", "no progress line");
   addLcmUrlOption(cli);  // accepted like every process; lcmlog: sources are read from the file
   return cli;

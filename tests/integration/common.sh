@@ -53,3 +53,24 @@ run_rgbd_slam() {
   grep -E "^rgbd-slam: frame" "$WORK/err" || true
 }
 summary() { awk -v k="$1" '$1 == k { print $2 }' "$WORK/out"; }
+
+# localise_in_saved_map MIN_POSES ATE_BOUND_M ARGS...: rgbd-slam ARGS saves its map
+# ($WORK/saved.map, summary $WORK/save.out), then runs again over the same frames with
+# --load-map --localise-only ($WORK/localised.txt, summary $WORK/localise.out), which must
+# pose at least MIN_POSES frames within ATE_BOUND_M and add no keyframe.
+localise_in_saved_map() {
+  local min_poses=$1 ate_bound=$2
+  shift 2
+  "$PROCS/rgbd-slam" "$@" --output "$WORK/saved.txt" --save-map "$WORK/saved.map" \
+      > "$WORK/save.out" 2> "$WORK/save.err" || fail "saving run failed: $(tail -5 "$WORK/save.err")"
+  grep -E "^(poses|keyframes|map_points|ate_rmse_m|map_saved_bytes|map_save_ms) " "$WORK/save.out"
+  "$PROCS/rgbd-slam" "$@" --output "$WORK/localised.txt" --load-map "$WORK/saved.map" --localise-only \
+      > "$WORK/localise.out" 2> "$WORK/localise.err" || fail "localise-only run failed: $(tail -5 "$WORK/localise.err")"
+  grep -E "^(poses|keyframes|map_points|ate_rmse_m|map_load_ms|map_start_ms|first_pose_frame|first_pose_ms) " "$WORK/localise.out"
+  local poses ate
+  poses=$(awk '$1 == "poses" { print $2 }' "$WORK/localise.out")
+  ate=$(awk '$1 == "ate_rmse_m" { print $2 }' "$WORK/localise.out")
+  [ "$poses" -ge "$min_poses" ] || fail "localise-only: only $poses frames got a pose (expected >= $min_poses)"
+  [ "$(awk '$1 == "keyframes" { print $2 }' "$WORK/localise.out")" -eq 0 ] || fail "localise-only added keyframes"
+  awk -v a="$ate" -v b="$ate_bound" 'BEGIN { exit !(a <= b) }' || fail "localise-only ATE $ate m exceeds $ate_bound m"
+}

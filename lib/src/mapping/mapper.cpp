@@ -63,6 +63,7 @@ class Mapper::Impl {
       : camera_(camera), options_(options), mode_(mode), adjuster_(baOptions(options, mode)) {}
 
   MapperResult addKeyframe(const KeyframeData& data, const std::atomic<bool>* interrupt);
+  void load(const LoadedMap& loaded);
   bool refine(const std::atomic<bool>* interrupt);
   MapChanges takeChanges() { return std::exchange(changes_, MapChanges{}); }
   const Map& map() const { return map_; }
@@ -131,6 +132,15 @@ MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atom
   cull_needed_ = true;
   result.status = MapperResult::Status::kIntegrated;
   return result;
+}
+
+// The saved map as it was: no bundle adjustment, no re-finding, no culling, no changes to
+// publish (whoever loads the mapper's map loads the tracker's from the same file).
+void Mapper::Impl::load(const LoadedMap& loaded) {
+  for (size_t i = 0; i < loaded.keyframes.size(); ++i) {
+    map_.addKeyframe(loaded.buildKeyframe(i, options_.keyframe_build));
+  }
+  for (const MapPointData& p : loaded.points) map_.addPoint(MapPoint(p));
 }
 
 void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
@@ -334,6 +344,7 @@ Mapper::~Mapper() = default;
 MapperResult Mapper::addKeyframe(const KeyframeData& keyframe, const std::atomic<bool>* interrupt) {
   return impl_->addKeyframe(keyframe, interrupt);
 }
+void Mapper::load(const LoadedMap& loaded) { impl_->load(loaded); }
 bool Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(interrupt); }
 MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }

@@ -195,6 +195,13 @@ bool MapperSync::waitForWork(std::chrono::milliseconds timeout) {
   return !stopping_ && (nextReadyLocked() || !converged_);
 }
 
+void MapperSync::adopt(int64_t map_id, KeyframeId next_id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  map_id_ = map_id;
+  next_id_ = next_id;
+  publisher_.start(map_id_, 0);
+}
+
 void MapperSync::stop() {
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -46,13 +46,18 @@ KeyframeOutboxOptions withoutRetention(KeyframeOutboxOptions options) {
 class SlamSystem::Impl {
  public:
   Impl(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
-       const LinkOptions& link)
+       const LinkOptions& link, const SlamStart& start)
       : options_(options), mode_(*parseSlamMode(options.mode)), deterministic_(deterministic),
+        localise_only_(start.map && start.localise_only),
         tracker_(camera, options.tracker, mode_, kMapId),
         tracker_sync_(kMapId, withoutRetention(options.sync.outbox)),
         mapper_(camera, options.mapper, mode_),
         mapper_sync_(&mapper_, mapperSyncOptions(options.sync.mapper, link)),
         keyframe_link_(link), map_link_(withSeed(link, 2)), receipt_link_(withSeed(link, 3)) {
+    if (start.map) startFrom(*start.map);
+    // Localising only, the mapper has nothing to do: it is not run at all, so its map stays
+    // the loaded one whatever the refinement would find to improve.
+    if (localise_only_) return;
     if (!deterministic_) worker_ = std::thread([this] { mapperLoop(); });
   }
 
@@ -75,7 +80,7 @@ class SlamSystem::Impl {
       last_receipt_us_ = now_us;
       sendReceipt(tracker_sync_.receipt(now_us), now_us);
     }
-    if (deterministic_) runMapper(now_us);
+    if (deterministic_ && !localise_only_) runMapper(now_us);
     return result;
   }
 
@@ -102,6 +107,15 @@ class SlamSystem::Impl {
     options.publisher.map_period_s = 0.0;
     options.publisher.diff = MapDiffOptions{0.0, 0.0, 0.0};
     return options;
+  }
+
+  // Both ends from the same file, before the first frame: the mapper's map and the
+  // tracker's replica agree, and keyframe ids (and so point ids) continue after the loaded.
+  void startFrom(const LoadedMap& map) {
+    tracker_.load(map, !localise_only_);
+    mapper_.load(map);
+    mapper_sync_.adopt(kMapId, map.nextKeyframeId());
+    tracker_sync_.startAfter(map.nextKeyframeId());
   }
 
   static LinkOptions withSeed(LinkOptions link, uint32_t offset) {
@@ -195,6 +209,7 @@ class SlamSystem::Impl {
   SlamOptions options_;
   SlamMode mode_;
   bool deterministic_;
+  bool localise_only_;
   Tracker tracker_;
   TrackerSync<KeyframeData> tracker_sync_;
   Mapper mapper_;
@@ -216,8 +231,8 @@ class SlamSystem::Impl {
 };
 
 SlamSystem::SlamSystem(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
-                       const LinkOptions& link)
-    : impl_(std::make_unique<Impl>(camera, options, deterministic, link)) {}
+                       const LinkOptions& link, const SlamStart& start)
+    : impl_(std::make_unique<Impl>(camera, options, deterministic, link, start)) {}
 SlamSystem::~SlamSystem() = default;
 TrackResult SlamSystem::process(const RgbdFrame& frame) { return impl_->process(frame); }
 void SlamSystem::finish() { impl_->finish(); }

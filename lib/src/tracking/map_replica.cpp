@@ -66,6 +66,13 @@ void MapReplica::addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& poi
   map_.addMeasurement(keyframe_id, point.measurement);
 }
 
+Keyframe* MapReplica::addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe) {
+  acked_.insert(keyframe->id);
+  return map_.addKeyframe(std::move(keyframe));
+}
+
+void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(map_.addPoint(point)); }
+
 void MapReplica::clear() {
   map_ = Map();
   acked_.clear();

@@ -79,6 +79,7 @@ class Tracker::Impl {
 
   bool applyMap(const MapUpdate& update) { return replica_.apply(update); }
   const Map& map() const { return replica_.map(); }
+  void load(const LoadedMap& loaded, bool add_keyframes);
 
   void reset() {
     replica_.clear();
@@ -91,6 +92,7 @@ class Tracker::Impl {
     have_previous_sbi_ = false;
     surfaces_.clear();
     keyframe_features_.clear();
+    keyframes_allowed_ = true;
   }
 
  private:
@@ -173,6 +175,7 @@ class Tracker::Impl {
   Vec6 velocity_ = Vec6::Zero();  // log of the last inter-frame motion (left, on T_c_w)
   int frames_since_keyframe_ = 0;
   KeyframeId next_keyframe_id_ = 0;
+  bool keyframes_allowed_ = true;  // false: localise in a loaded map, add nothing to it
   double last_quality_ = 0.0;  // of the last accepted frame (0 after loss and reset)
   bool frame_inconsistent_ = false;  // this frame's first pose was refused by the check
   std::vector<Vec3> integrity_points_;  // scratch: the points the check projects...
@@ -319,6 +322,26 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   result.pose.quality = 1.0;
   result.new_keyframe = std::move(data);
   return result;
+}
+
+// The replica as the file holds it, every keyframe acknowledged (the mapper loads the same
+// file). Lost from the start: the relocaliser tries the last pose first, taken to be where
+// the saved session started (keyframe 0, where a vehicle back on its pad is), then the
+// keyframes whose small blurry images are most like the frame's.
+void Tracker::Impl::load(const LoadedMap& loaded, bool add_keyframes) {
+  reset();
+  for (size_t i = 0; i < loaded.keyframes.size(); ++i) {
+    std::unique_ptr<Keyframe> keyframe = loaded.buildKeyframe(i, options_.keyframe_build);
+    rememberSurface(*keyframe);
+    keyframe->releaseMappingData();
+    replica_.addAcknowledgedKeyframe(std::move(keyframe));
+  }
+  for (const MapPointData& p : loaded.points) replica_.addAcknowledgedPoint(MapPoint(p));
+  next_keyframe_id_ = loaded.nextKeyframeId();
+  keyframes_allowed_ = add_keyframes;
+  if (loaded.keyframes.empty()) return;  // nothing to localise in: initialise as usual
+  T_c_w_ = loaded.keyframes.front().T_w_c.inverse();
+  state_ = TrackingState::kLost;
 }
 
 SE3 Tracker::Impl::predictPose() const {
@@ -659,7 +682,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
                                   depthPointsAllowed(mode_, next_keyframe_id_), cornerCount()};
-  if (shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
+  if (keyframes_allowed_ && shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
   }
   return result;
@@ -851,5 +874,6 @@ TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame);
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }
+void Tracker::load(const LoadedMap& loaded, bool add_keyframes) { impl_->load(loaded, add_keyframes); }
 
 }  // namespace rgbdslam

@@ -16,6 +16,9 @@
 //   the map changed, false when there is nothing left to do (converged). Interrupted
 //   (returns early, keeping what was done) when *interrupt becomes true, i.e. a new
 //   keyframe arrived.
+//   load(map): before the first keyframe, start from a map file's content (map_file.h): its
+//   keyframes (images rebuilt), points and measurements as saved; nothing is re-optimised
+//   and nothing counts as a change. Keyframes added later continue after its ids.
 //   takeChanges(): the ids of keyframes and points changed or removed since the last call.
 //   The mapper versions nothing: the map publisher (sync/map_publisher.h) does.
 // Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
@@ -36,6 +39,7 @@
 
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/map/map_file.h"
 #include "rgbdslam/mapping/bundle_adjuster.h"
 #include "rgbdslam/mapping/data_association.h"
 #include "rgbdslam/mapping/epipolar_search.h"
@@ -110,6 +114,7 @@ class Mapper {
   Mapper(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode);
   ~Mapper();
   MapperResult addKeyframe(const KeyframeData& keyframe, const std::atomic<bool>* interrupt = nullptr);
+  void load(const LoadedMap& loaded);
   bool refine(const std::atomic<bool>* interrupt = nullptr);
   MapChanges takeChanges();
   const Map& map() const;

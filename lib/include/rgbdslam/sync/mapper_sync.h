@@ -18,6 +18,9 @@
 //     map goes on without them rather than wait for ever. A mapper that lost its whole
 //     journal (no map yet) takes the map id from such a receipt when keyframes of that map
 //     wait in its queue.
+//   adopt(map_id, next_id): before anything else, for a mapper started from a map file: the
+//     map is 'map_id', keyframes below next_id are integrated (the file's), and the first
+//     publication is a snapshot.
 //   restore(journal contents): before anything else: re-integrates the journaled keyframes
 //     (ids increasing; gaps are keyframes skipped before) and continues the versions after
 //     the last journaled one (the first is a snapshot).
@@ -83,6 +86,7 @@ class MapperSync {
 
   // Re-integrates journaled keyframes (in order) and continues after last_version.
   Status restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version);
+  void adopt(int64_t map_id, KeyframeId next_id);
 
   // Transport thread.
   IntakeVerdict offer(IncomingKeyframe keyframe);

@@ -39,6 +39,9 @@ class TrackerSync {
     keyframes_created_ = std::max<int64_t>(keyframes_created_, id + 1);
   }
   std::vector<const Message*> resendsDue(int64_t now_us) { return outbox_.resendsDue(now_us); }
+  // A tracker started from a map file: keyframes below 'next_id' exist (they are the file's,
+  // which the mapper loaded too), so receipts say so.
+  void startAfter(KeyframeId next_id) { keyframes_created_ = std::max<int64_t>(keyframes_created_, next_id); }
 
   // 'apply(update)' applies the content to the replica and returns false when entries named
   // keyframes the replica lacks (they are skipped).

@@ -16,6 +16,10 @@
 //   the link is perfect and so every change is sent at once, as above (keyframes and receipts handed to MapperSync, map messages through
 //   a queue the tracker drains before each frame); a new keyframe interrupts refinement;
 //   when keyframe_queue_length keyframes wait, the tracker waits for the mapper.
+// Started from a map file (SlamStart): tracker and mapper load the same map before the first
+//   frame (Tracker::load, Mapper::load) and the protocol continues after its keyframes. To
+//   localise only, the tracker adds no keyframes and the mapper is not run: its map stays
+//   the loaded one.
 // Call order: construct, process() per frame, finish() (waits for the mapper), then map().
 #include <memory>
 
@@ -38,6 +42,12 @@ struct SlamOptions {
   void bind(OptionRegistry* registry);
 };
 
+// Where a run starts: a new map (default) or a loaded one.
+struct SlamStart {
+  const LoadedMap* map = nullptr;  // read during construction only
+  bool localise_only = false;      // with a map: track in it, add nothing
+};
+
 struct SlamStats {
   long frames = 0, keyframes = 0, lost_frames = 0, bad_frames = 0;
   long points = 0;                  // in the mapper's map at finish()
@@ -50,7 +60,7 @@ struct SlamStats {
 class SlamSystem {
  public:
   SlamSystem(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
-             const LinkOptions& link = {});
+             const LinkOptions& link = {}, const SlamStart& start = {});
   ~SlamSystem();
   TrackResult process(const RgbdFrame& frame);
   void finish();

@@ -53,6 +53,10 @@ class MapReplica {
   Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe) { return map_.addKeyframe(std::move(keyframe)); }
   // A point from depth created in keyframe 'keyframe_id' and its measurement there.
   void addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& point);
+  // A keyframe and a point of a loaded map (map_file.h): the mapper holds them already, so
+  // the keyframe counts as acknowledged. Keyframes first (a point's slot needs its source).
+  Keyframe* addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe);
+  void addAcknowledgedPoint(const MapPoint& point);
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool apply(const MapUpdate& update);
   void clear();

@@ -19,6 +19,12 @@
 //   (feature_relocaliser.h), from wherever the camera is in their view. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
+//   load(map, add_keyframes): before the first frame, start from a map file's content
+//   (map_file.h) instead of initialising a new map: the replica gets its keyframes (pyramids
+//   and small blurry images rebuilt, all acknowledged) and points, and the state is lost, so
+//   the relocaliser finds the pose in the loaded map on the first frames (trying first the
+//   saved session's start, keyframe 0's pose). New keyframe ids continue after the loaded
+//   ones; with add_keyframes false (localising only) the tracker adds none.
 //   applyMap(update): a map version's content goes into the replica (map_replica.h); which
 //   versions apply, in which order, is the map protocol's business (sync/tracker_sync.h).
 // Frames: T_w_c camera to world; pixels at level 0; depth in metres.
@@ -29,6 +35,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/rgbd_frame.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/map/map_file.h"
 #include "rgbdslam/model/point_creation.h"
 #include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/tracking/depth_alignment.h"
@@ -172,6 +179,7 @@ class Tracker {
 
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool applyMap(const MapUpdate& update);
+  void load(const LoadedMap& loaded, bool add_keyframes);
 
   const Map& map() const;
   void reset();  // forget the map; the next frame initialises a new one
