@@ -332,7 +332,7 @@ void Tracker::Impl::load(const LoadedMap& loaded, bool add_keyframes) {
   reset();
   for (size_t i = 0; i < loaded.keyframes.size(); ++i) {
     std::unique_ptr<Keyframe> keyframe = loaded.buildKeyframe(i, options_.keyframe_build);
-    rememberSurface(*keyframe);
+    rememberKeyframe(*keyframe);
     keyframe->releaseMappingData();
     replica_.addAcknowledgedKeyframe(std::move(keyframe));
   }
