@@ -81,6 +81,9 @@ void DepthAlignmentOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "depth_align_effective_samples", &effective_samples, 1, 1000000, "samples",
           "the surface samples count as at most this many independent measurements in the "
           "pose's uncertainty (their systematic errors are shared)");
+  r->bind(s, "depth_align_max_step_m", &max_step_m, 0.0, 10.0, "m",
+          "the aligned pose must lie within this of the constant-velocity prediction");
+  r->bind(s, "depth_align_max_step_deg", &max_step_deg, 0.0, 180.0, "deg", "...and within this angle");
   r->bind(s, "depth_align_min_inliers", &min_inliers, 3, 1000000, "samples",
           "fewer samples agreeing with the aligned pose: depth does not hold it");
   r->bind(s, "depth_align_min_inlier_ratio", &min_inlier_ratio, 0.0, 1.0, "",

@@ -549,6 +549,13 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
       fit.inliers_extra < o.min_inlier_ratio * fit.extra_residuals) {
     return attempt;
   }
+  // A vehicle does not jump: a fit far from the motion model's prediction found another
+  // basin of the surfaces, not the pose.
+  const SE3 predicted_w_c = velocity_start.inverse(), fitted_w_c = fit.T_c_w.inverse();
+  if ((fitted_w_c.translation() - predicted_w_c.translation()).norm() > o.max_step_m ||
+      fitted_w_c.rotation().angularDistance(predicted_w_c.rotation()) > o.max_step_deg * M_PI / 180.0) {
+    return attempt;
+  }
   Attempt aligned = attempt;
   aligned.T_c_w = fit.T_c_w;
   aligned.uncertainty = poseUncertainty(fit.information - surfaces_excess);

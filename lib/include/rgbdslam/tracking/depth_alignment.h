@@ -58,6 +58,12 @@ struct DepthAlignmentOptions {
   // the fit's own uncertainty, from 1500 samples, said 1.5 cm.
   int effective_samples = 100;
   int min_inliers = 100;          // fewer samples agreeing with the pose: depth does not hold it
+  // The aligned pose must lie within this of the motion model's prediction (constant
+  // velocity): an alignment that moves the camera further settled in another basin of the
+  // surfaces (measured on the office with every sensor effect: jumps of up to 28 cm in
+  // depth-aided frames), and a vehicle's velocity does not change that much in one frame.
+  double max_step_m = 0.05;       // [m]
+  double max_step_deg = 5.0;      // [deg]
   double min_inlier_ratio = 0.5;  // ...nor when fewer than this fraction of those associated agree
 
   void bind(OptionRegistry* registry, const std::string& section);  // as depth_align_*
