@@ -37,7 +37,7 @@ void BM_RenderRoomAutoExposure(benchmark::State& state) {
   renderFrames(state, "room,auto_exposure=0.5");
 }
 void BM_RenderRoomDepthEffects(benchmark::State& state) {
-  renderFrames(state, "room,depth_noise=nguyen,edge_holes=1,ir_shadow=1,dark_holes=0.02");
+  renderFrames(state, "room,depth_noise=nguyen,edge_holes=1,ir_shadow=1,dark_holes=0.01");
 }
 void BM_RenderCorridorAllEffects(benchmark::State& state) {
   renderFrames(state, "corridor,effects=all");
