@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "common/map_journal.h"
+#include "rgbdslam/map/map_file.h"
 #include "sample_messages.h"
 
 using namespace rgbdslam;
@@ -82,6 +83,28 @@ void writeJournalAndLog(const fs::path& out) {
   write(out / "fuzz_lcm_log", "two_frames", log);
 }
 
+// A map file of one keyframe (the sample keyframe, its points and measurements).
+void writeMapFile(const fs::path& out) {
+  const KeyframeData sample = test::sampleKeyframe();
+  PinholeCamera camera;
+  camera.width = sample.grey.cols;
+  camera.height = sample.grey.rows;
+  camera.cx = (camera.width - 1) / 2.0;
+  camera.cy = (camera.height - 1) / 2.0;
+  camera.depth_factor = sample.depth_scale;
+  Map map;
+  KeyframeData bare = sample;
+  bare.measurements.clear();
+  map.addKeyframe(makeKeyframe(bare, KeyframeBuildOptions{}));
+  for (const MapPointData& p : sample.new_points) map.addPoint(MapPoint(p));
+  for (const Measurement& m : sample.measurements) {
+    if (map.point(m.point_id)) map.addMeasurement(sample.id, m);
+  }
+  const auto bytes = encodeMapFile(map, camera, SlamMode::kDepthBa);
+  if (!bytes) throw std::runtime_error("cannot encode the seed map: " + bytes.error());
+  write(out / "fuzz_map_file", "one_keyframe", *bytes);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,6 +116,7 @@ int main(int argc, char** argv) {
     writeMessages(argv[1]);
     writeFiles(argv[1], argv[2]);
     writeJournalAndLog(argv[1]);
+    writeMapFile(argv[1]);
   } catch (const std::exception& e) {
     std::cerr << "make-fuzz-seeds: " << e.what() << "\n";
     return 1;
