@@ -19,6 +19,7 @@
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/tracking/pose_optimizer.h"
 #include "rgbdslam/tracking/relocaliser.h"
+#include "rgbdslam/util/background_worker.h"
 
 namespace rgbdslam {
 namespace {
@@ -35,7 +36,12 @@ struct Attempt {
   bool did_coarse = false;      // the coarse stage ran
   PoseUncertainty uncertainty;  // of the fine stage's pose (infinite when it failed)
   bool depth_aided = false;     // the pose fit included point-to-plane against depth
-  int depth_inliers = 0;        // ...and this many surface samples agreed
+};
+
+// What a keyframe leaves the tracker besides its pyramid, in depth modes (sizes at 640x480).
+struct KeyframeExtras {
+  std::vector<SurfaceSample> surface;  // depth-aided tracking: 32 bytes a sample, at most 1200 (38 kB)
+  Features3d features;                 // relocalisation: 52 bytes a feature, at most 500 (26 kB)
 };
 
 // A fine-stage slot's search outcome, to restore an earlier attempt.
@@ -90,8 +96,7 @@ class Tracker::Impl {
     next_keyframe_id_ = 0;
     last_quality_ = 0.0;
     have_previous_sbi_ = false;
-    surfaces_.clear();
-    keyframe_features_.clear();
+    extras_.clear();
     keyframes_allowed_ = true;
   }
 
@@ -145,8 +150,12 @@ class Tracker::Impl {
   bool depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const;
   Attempt alignWithDepth(const Attempt& attempt, const RgbdFrame& frame);
   // What a keyframe leaves the tracker besides its pyramid (depth modes): surface samples
-  // (depth-aided tracking) and 3-D features (relocalisation from anywhere).
+  // (depth-aided tracking) and 3-D features (relocalisation from anywhere), made on the
+  // keyframe worker so that the frame which makes the keyframe does not wait for them.
   void rememberKeyframe(const Keyframe& keyframe);
+  // A keyframe's extras, waiting for the worker if they are not made yet; null when the
+  // keyframe has none.
+  const KeyframeExtras* extrasOf(KeyframeId id) const;
   // Relocalisation by features (feature_relocaliser.h) against the best-ranked keyframes.
   std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame,
                                               const std::vector<RelocalisationCandidate>& ranked);
@@ -187,11 +196,8 @@ class Tracker::Impl {
   static constexpr double kRelocaliseRefineKeep = 0.9;
   // A point's depth record counts after this many checks at accepted poses.
   static constexpr int kDepthRecordMin = 3;
-  // Per keyframe: its surface samples for depth-aided tracking (depth modes; 32 bytes a sample, at most 1200 at 640x480: 38 kB).
-  std::unordered_map<KeyframeId, std::vector<SurfaceSample>> surfaces_;
+  std::unordered_map<KeyframeId, std::shared_future<KeyframeExtras>> extras_;
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
-  // Per keyframe: ORB features with depth for relocalisation (depth modes; 52 bytes a feature, at most 500: 26 kB).
-  std::unordered_map<KeyframeId, Features3d> keyframe_features_;
 
   // Per-frame buffers, reused.
   cv::Mat grey_;
@@ -205,6 +211,8 @@ class Tracker::Impl {
   std::vector<uint8_t> inliers_;
   std::vector<double> depths_, displacements_;
   std::vector<SlotOutcome> outcome_;
+  // Makes the keyframes' extras; last, so that it is joined before anything else goes.
+  BackgroundWorker keyframe_worker_;
   // J^T W J of the last fine stage's pose fit (zero when it failed).
   Eigen::Matrix<double, 6, 6> fine_information_ = Eigen::Matrix<double, 6, 6>::Zero();
 };
@@ -459,17 +467,17 @@ std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, cons
 std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
                                                            const std::vector<RelocalisationCandidate>& ranked) {
   const FeatureRelocaliserOptions& o = options_.reloc_features;
-  if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || keyframe_features_.empty()) return std::nullopt;
+  if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || extras_.empty()) return std::nullopt;
   const Features3d current = extractFeatures3d(
       grey_, depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
                            options_.keyframe_build.max_depth_m),
       camera_, o);
   for (size_t k = 0; k < ranked.size() && k < static_cast<size_t>(o.candidates); ++k) {
-    const auto features = keyframe_features_.find(ranked[k].keyframe);
+    const KeyframeExtras* extras = extrasOf(ranked[k].keyframe);
     const Keyframe* keyframe = replica_.map().keyframe(ranked[k].keyframe);
-    if (features == keyframe_features_.end() || !keyframe) continue;
+    if (!extras || !keyframe) continue;
     const std::optional<FeaturePose> pose =
-        poseFromFeatures(current, features->second, keyframe->T_w_c, camera_, pose_options_, o);
+        poseFromFeatures(current, extras->features, keyframe->T_w_c, camera_, pose_options_, o);
     if (!pose) continue;
     // The features' pose is within the depth noise: the fine stage first, as from the last
     // pose; short of a good result the coarse stage too, and the better is kept.
@@ -500,7 +508,7 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
 
 bool Tracker::Impl::depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const {
   return options_.depth_align.enabled && depthInTracking(mode_) && !frame.depth.empty() &&
-         !surfaces_.empty() &&
+         !extras_.empty() &&
          (attempt.found < options_.depth_align.below_points || !poseFixed(attempt.uncertainty));
 }
 
@@ -509,9 +517,9 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   anchors_.clear();
   size_t used = 0;
   for (KeyframeId id : replica_.map().nearestKeyframes(attempt.T_c_w.inverse(), 4 * static_cast<size_t>(o.keyframes))) {
-    const auto surface = surfaces_.find(id);
-    if (surface == surfaces_.end() || surface->second.empty()) continue;
-    appendAnchors(surface->second, replica_.map().keyframe(id)->T_w_c, &anchors_);
+    const KeyframeExtras* extras = extrasOf(id);
+    if (!extras || extras->surface.empty()) continue;
+    appendAnchors(extras->surface, replica_.map().keyframe(id)->T_w_c, &anchors_);
     if (++used >= static_cast<size_t>(o.keyframes)) break;
   }
   if (anchors_.empty()) return attempt;
@@ -560,7 +568,6 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   aligned.T_c_w = fit.T_c_w;
   aligned.uncertainty = poseUncertainty(fit.information - surfaces_excess);
   aligned.depth_aided = true;
-  aligned.depth_inliers = fit.inliers_extra;
   aligned.found = 0;
   depths_.clear();
   for (size_t i = 0; i < found.size(); ++i) {
@@ -579,12 +586,22 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
 
 void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
   if (!depthInTracking(mode_)) return;
-  if (options_.depth_align.enabled) {
-    surfaces_[keyframe.id] = sampleSurface(keyframe.depth, camera_, options_.pose.noise, options_.depth_align);
-  }
-  if (options_.reloc_features.enabled) {
-    keyframe_features_[keyframe.id] = extractFeatures3d(keyframe.grey(), keyframe.depth, camera_, options_.reloc_features);
-  }
+  if (!options_.depth_align.enabled && !options_.reloc_features.enabled) return;
+  // The job owns what it reads: the images' buffers (shared, never written again) and copies
+  // of the options, so that neither the keyframe nor an option change can reach it.
+  extras_[keyframe.id] = keyframe_worker_.submit(
+      [depth = keyframe.depth, grey = keyframe.grey(), camera = camera_, noise = options_.pose.noise,
+       align = options_.depth_align, features = options_.reloc_features] {
+        KeyframeExtras extras;
+        if (align.enabled) extras.surface = sampleSurface(depth, camera, noise, align);
+        if (features.enabled) extras.features = extractFeatures3d(grey, depth, camera, features);
+        return extras;
+      });
+}
+
+const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) const {
+  const auto extras = extras_.find(id);
+  return extras == extras_.end() ? nullptr : &extras->second.get();
 }
 
 int Tracker::Impl::cornerCount() const {
