@@ -63,6 +63,7 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   o.source = cli.get("source");
   o.camera_path = cli.has("camera") ? cli.get("camera") : "";
   o.output = cli.get("output");
+  o.frame_log = cli.has("frame-log") ? cli.get("frame-log") : "";
   o.deterministic = cli.has("deterministic");
   o.quiet = cli.has("quiet");
   o.groundtruth_path = cli.has("groundtruth") ? cli.get("groundtruth") : "";
@@ -115,6 +116,12 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
   } else {
     groundtruth = groundTruthFor(options.source);
   }
+  std::ofstream frame_log;
+  if (!options.frame_log.empty()) {
+    frame_log.open(options.frame_log);
+    if (!frame_log) return Error{"cannot write --frame-log " + options.frame_log};
+    frame_log << "seq,t_s,status,state,points,quality,sigma_m,sigma_deg,depth_aided,inconsistent,keyframe,track_ms,reason\n";
+  }
   double load_ms = 0.0;
   auto start_map = loadStartMap(options, camera, &load_ms);
   if (!start_map) return Error{start_map.error()};
@@ -122,6 +129,7 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
   auto runner = std::unique_ptr<BatchRunner>(
       new BatchRunner(std::move(options), camera, std::move(*source), std::move(groundtruth), loaded));
   runner->map_load_ms_ = load_ms;
+  runner->frame_log_ = std::move(frame_log);
   return runner;
 }
 
@@ -155,6 +163,21 @@ void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
   std::cerr << (tty ? "\r" : "") << line << (tty && !final_line ? "" : "\n") << std::flush;
 }
 
+void BatchRunner::logFrame(const TrackResult& result) {
+  if (!frame_log_.is_open()) return;
+  static const char* const kStatus[] = {"initialised", "tracked", "lost", "relocalised", "bad_frame", "not_initialised"};
+  const std::string& reason = result.status == TrackResult::Status::kBadFrame ? result.error : result.lost_reason;
+  std::string quoted;  // CSV: in double quotes, a quote doubled
+  for (char c : reason) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  char line[160];
+  std::snprintf(line, sizeof(line), "%ld,%.6f,%s,%s,%d,%.3f,%.5f,%.4f,%d,%d,%d,%.3f,", static_cast<long>(result.pose.seq),
+                result.pose.utime * 1e-6, kStatus[static_cast<int>(result.status)], toString(result.pose.state),
+                result.pose.points_tracked, result.pose.quality, result.pose_sigma_m, result.pose_sigma_deg,
+                result.depth_aided ? 1 : 0, result.inconsistent ? 1 : 0, result.new_keyframe ? 1 : 0,
+                result.track_ms);
+  frame_log_ << line << '"' << quoted << "\"\n";
+}
+
 int BatchRunner::run(const std::atomic<bool>& stop) {
   Trajectory trajectory;
   TrackResult last;
@@ -176,6 +199,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     ++frames;
     last = slam_->process(input.frame);
     track_ms_.push_back(last.track_ms);
+    logFrame(last);
     if (last.status == TrackResult::Status::kBadFrame) {
       std::cerr << "\nrgbd-slam: error: frame " << input.frame.seq << ": " << last.error << "\n";
       ++bad_frames_;

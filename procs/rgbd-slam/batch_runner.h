@@ -1,6 +1,7 @@
 #pragma once
 // The rgbd-slam loop: read frames, run the SLAM system, write the trajectory, show
 // progress, and at the end evaluate against ground truth when there is one.
+#include <fstream>
 #include <atomic>
 #include <map>
 #include <memory>
@@ -21,6 +22,7 @@ struct BatchOptions {
   std::string source;
   std::string camera_path;                 // empty for synth: (the renderer's camera)
   std::string output;                      // trajectory file
+  std::string frame_log;                   // per-frame CSV; empty: none
   bool deterministic = false;
   long max_frames = 0;                     // 0 = all
   bool quiet = false;
@@ -46,6 +48,7 @@ class BatchRunner {
   bool saveMapIfAsked();
   void printMapFileSummary() const;
   void showProgress(const TrackResult& result, bool final_line);
+  void logFrame(const TrackResult& result);
   void printSummary(const Trajectory& trajectory) const;
 
   BatchOptions options_;
@@ -54,6 +57,7 @@ class BatchRunner {
   std::optional<Trajectory> groundtruth_;
   std::unique_ptr<SlamSystem> slam_;
   std::vector<double> track_ms_;
+  std::ofstream frame_log_;  // open when --frame-log is given
   std::vector<TrackingState> pose_states_;       // the state of each trajectory pose
   std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted

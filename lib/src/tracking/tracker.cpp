@@ -132,7 +132,11 @@ class Tracker::Impl {
     return point.times_projected < options_.quality.unreliable_after_searches ||
            point.times_found >= options_.quality.unreliable_found_ratio * point.times_projected;
   }
-  TrackResult accept(const Attempt& attempt, const RgbdFrame& frame, TrackingState state);
+  // 'state' is reported; 'grade' (default: the same) is what the keyframe rule sees.
+  TrackResult accept(const Attempt& attempt, const RgbdFrame& frame, TrackingState state,
+                     std::optional<TrackingState> grade = std::nullopt);
+  // Whether the pose is precise enough to be reported good (QualityOptions::good_step_*).
+  bool preciseForFlight(const PoseUncertainty& uncertainty) const;
   KeyframeData addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
                            std::vector<Measurement> measurements);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
@@ -386,10 +390,13 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
     if (!retried) return lostResult(attempt, "depth disagrees with the pose: " + integrity.describe(), true);
     attempt = *retried;
   }
-  const TrackingState state = attempt.quality >= options_.quality.good && !attempt.depth_aided
+  // PTAM's grade (found / searched) decides keyframes; the report also asks for precision.
+  const TrackingState grade = attempt.quality >= options_.quality.good && !attempt.depth_aided
                                   ? TrackingState::kTracking
                                   : TrackingState::kDodgy;
-  return accept(attempt, frame, state);
+  const bool precise = preciseForFlight(attempt.uncertainty);
+  return accept(attempt, frame, grade == TrackingState::kTracking && !precise ? TrackingState::kDodgy : grade,
+                grade);
 }
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
@@ -675,8 +682,17 @@ bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points) const {
 
 // Takes the attempt's pose, updates the motion model and point statistics, and decides
 // about a keyframe.
+bool Tracker::Impl::preciseForFlight(const PoseUncertainty& uncertainty) const {
+  const double independent_steps = 3.0 * std::sqrt(2.0);  // 3 sigma of a difference of two
+  const QualityOptions& q = options_.quality;
+  const bool metric = mode_ != SlamMode::kMono;
+  return (!metric || q.good_step_m <= 0.0 || independent_steps * uncertainty.translation_m <= q.good_step_m) &&
+         (q.good_step_deg <= 0.0 || independent_steps * uncertainty.rotation_rad * 180.0 / M_PI <= q.good_step_deg);
+}
+
 TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame,
-                                  TrackingState state) {
+                                  TrackingState state, std::optional<TrackingState> grade) {
+  const TrackingState keyframe_grade = grade.value_or(state);
   if (state != TrackingState::kRelocalised) velocity_ = (attempt.T_c_w * T_c_w_.inverse()).log();
   T_c_w_ = attempt.T_c_w;
   last_quality_ = attempt.quality;
@@ -698,6 +714,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   result.pose.points_tracked = attempt.found;
   result.pose.quality = attempt.quality;
   result.depth_aided = attempt.depth_aided;
+  result.pose_sigma_m = attempt.uncertainty.translation_m;
+  result.pose_sigma_deg = attempt.uncertainty.rotation_rad * 180.0 / M_PI;
   ++frames_since_keyframe_;
   // A frame held by depth makes a keyframe only where it offers corners for new points: one
   // without would carry only its depth-held pose into the map, and the next frames, aligned
@@ -706,8 +724,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const bool corners_for_points = !attempt.depth_aided || cornerCount() >= options_.keyframes.few_points;
   const bool keyframe_allowed =
       corners_for_points &&
-      (state == TrackingState::kTracking ||
-       (state == TrackingState::kDodgy && options_.keyframes_while_dodgy &&
+      (keyframe_grade == TrackingState::kTracking ||
+       (keyframe_grade == TrackingState::kDodgy && options_.keyframes_while_dodgy &&
         depthPointsAllowed(mode_, next_keyframe_id_)));
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,

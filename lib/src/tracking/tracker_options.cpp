@@ -62,6 +62,11 @@ void QualityOptions::bind(OptionRegistry* r, const std::string& s) {
           "direction) exceeds this");
   r->bind(s, "max_pose_sigma_deg", &max_pose_sigma_deg, 0.0, 180.0, "deg",
           "lost when the pose's rotation standard deviation (worst axis) exceeds this");
+  r->bind(s, "good_step_m", &good_step_m, 0.0, 100.0, "m",
+          "reported tracking only when 3 sigma of the frame-to-frame step error (pose "
+          "sigma * 3 sqrt 2) stays within this; else dodgy (not mono; 0: no limit)");
+  r->bind(s, "good_step_deg", &good_step_deg, 0.0, 180.0, "deg",
+          "...and within this for the rotation (0: no limit)");
   r->bind(s, "unreliable_after_searches", &unreliable_after_searches, 1, 1000000, "frames",
           "a point searched this often and rarely found no longer counts in the quality");
   r->bind(s, "unreliable_found_ratio", &unreliable_found_ratio, 0.0, 1.0, "",

@@ -28,6 +28,7 @@
 //   applyMap(update): a map version's content goes into the replica (map_replica.h); which
 //   versions apply, in which order, is the map protocol's business (sync/tracker_sync.h).
 // Frames: T_w_c camera to world; pixels at level 0; depth in metres.
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -103,6 +104,14 @@ struct QualityOptions {
   // freedom; points in a line or all far away do not, whatever their number.
   double max_pose_sigma_m = 0.05;   // [m]
   double max_pose_sigma_deg = 1.0;  // [deg]
+  // What a flight controller may follow without question: a frame is reported tracking
+  // (good) only when the fit's uncertainty keeps its frame-to-frame step error within these
+  // at 3 sigma, taking two frames' errors as independent (sigma <= step / (3 sqrt 2); for
+  // 2 cm: 4.7 mm). Between this and max_pose_sigma_* the pose is published as dodgy. Only
+  // the report: keyframes follow the found/searched rule as in PTAM. The translation limit
+  // applies where the map is metric (not mono). 0: no limit.
+  double good_step_m = 0.02;    // [m]
+  double good_step_deg = 1.0;   // [deg]
   // A point searched at least this often and found in less than unreliable_found_ratio of
   // those frames is unreliable (fur, thin structures, wrong depth): still searched, but it
   // does not count in the quality, which should measure the view, not the map's bad points.
@@ -168,6 +177,10 @@ struct TrackResult {
   // The points found were too few to fix the pose, and the depth image held it with them
   // (depth_alignment.h): the state is dodgy.
   bool depth_aided = false;
+  // The pose fit's 1-sigma uncertainty (largest axis) of the camera centre and of the
+  // orientation, from its measurements' noise models; infinite when the fit had none.
+  double pose_sigma_m = INFINITY;    // [m]
+  double pose_sigma_deg = INFINITY;  // [deg]
   double track_ms = 0.0;                     // time spent in track() [ms]
 };
 
