@@ -120,7 +120,7 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
   if (!options.frame_log.empty()) {
     frame_log.open(options.frame_log);
     if (!frame_log) return Error{"cannot write --frame-log " + options.frame_log};
-    frame_log << "seq,t_s,status,state,points,quality,sigma_m,sigma_deg,depth_aided,inconsistent,keyframe,track_ms,reason\n";
+    frame_log << "seq,t_s,status,state,points,quality,sigma_m,sigma_deg,correction_m,depth_aided,inconsistent,keyframe,track_ms,reason\n";
   }
   double load_ms = 0.0;
   auto start_map = loadStartMap(options, camera, &load_ms);
@@ -170,10 +170,10 @@ void BatchRunner::logFrame(const TrackResult& result) {
   std::string quoted;  // CSV: in double quotes, a quote doubled
   for (char c : reason) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
   char line[160];
-  std::snprintf(line, sizeof(line), "%ld,%.6f,%s,%s,%d,%.3f,%.5f,%.4f,%d,%d,%d,%.3f,", static_cast<long>(result.pose.seq),
+  std::snprintf(line, sizeof(line), "%ld,%.6f,%s,%s,%d,%.3f,%.5f,%.4f,%.4f,%d,%d,%d,%.3f,", static_cast<long>(result.pose.seq),
                 result.pose.utime * 1e-6, kStatus[static_cast<int>(result.status)], toString(result.pose.state),
                 result.pose.points_tracked, result.pose.quality, result.pose_sigma_m, result.pose_sigma_deg,
-                result.depth_aided ? 1 : 0, result.inconsistent ? 1 : 0, result.new_keyframe ? 1 : 0,
+                result.correction_m, result.depth_aided ? 1 : 0, result.inconsistent ? 1 : 0, result.new_keyframe ? 1 : 0,
                 result.track_ms);
   frame_log_ << line << '"' << quoted << "\"\n";
 }
@@ -206,6 +206,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     }
     if (last.status != TrackResult::Status::kBadFrame) ++state_frames_[last.pose.state];
     inconsistent_frames_ += last.inconsistent;
+    max_correction_m_ = std::max(max_correction_m_, last.correction_m);
     depth_aided_frames_ += last.depth_aided;
     if (hasPose(last.status) && first_pose_ms_ < 0) {
       first_pose_frame_ = frames;
@@ -267,6 +268,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   }
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
+  std::printf("map_correction_max_m %.4f\n", max_correction_m_);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printMapFileSummary();
   printPeakRss();

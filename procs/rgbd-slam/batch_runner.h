@@ -62,6 +62,7 @@ class BatchRunner {
   std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted
   long depth_aided_frames_ = 0;   // frames whose pose depth held with too few points
+  double max_correction_m_ = 0.0;  // largest map correction not yet in the published pose [m]
   long bad_frames_ = 0;
   // Map files (printed only when --load-map or --save-map is given).
   double map_load_ms_ = 0.0, map_start_ms_ = 0.0, map_save_ms_ = 0.0;

@@ -382,6 +382,47 @@ TEST_F(TrackerMapUpdateTest, SnapshotKeepsProvisionalPointsOfUnacknowledgedKeyfr
   EXPECT_EQ(tracker_.map().numPoints(), 0u);
 }
 
+// A map update that moves the whole map 10 cm (as a loop closure or the mapper's adjustment
+// moves keyframes under the tracker): the pose in the map moves with it at once, the
+// published pose takes the 10 cm in at the correction rate (0.1 m/s: 3.3 mm a frame at
+// 30 Hz), and says how much is left.
+TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
+  TrackResult last;
+  for (size_t i = 1; i <= 5; ++i) last = tracker_.track(roomFrame(i));
+  ASSERT_EQ(last.pose.state, TrackingState::kTracking);
+  const Vec3 shift(0.10, 0.0, 0.0);
+  MapUpdate moved = update(1);
+  moved.acked_keyframes = {0};
+  moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
+  for (const auto& [id, point] : tracker_.map().points()) {
+    MapPointData data = point.data();
+    data.p_w += shift;
+    moved.points.push_back(data);
+  }
+  EXPECT_TRUE(tracker_.applyMap(moved));
+  const double step_s = 1.0 / 30.0, rate_m_s = TrackerOptions{}.correction_rate_m_s;
+  Vec3 previous = last.pose.T_w_c.translation();
+  for (size_t i = 6; i <= 60; ++i) {
+    const TrackResult result = tracker_.track(roomFrame(i));
+    ASSERT_EQ(result.status, Status::kTracked) << "frame " << i;
+    // The map pose carries the shift; the published one steps by the camera's own motion
+    // (within the tracking error) plus at most one frame's share of the correction.
+    EXPECT_LT(positionError(SE3(result.map_T_w_c.rotation(), result.map_T_w_c.translation() - shift), i), 0.01);
+    const Vec3 published = result.pose.T_w_c.translation();
+    const Vec3 truth_step = (room().groundTruthPose(0).inverse() * room().groundTruthPose(i)).translation() -
+                            (room().groundTruthPose(0).inverse() * room().groundTruthPose(i - 1)).translation();
+    EXPECT_LT(((published - previous) - truth_step).norm(), rate_m_s * step_s + 0.005) << "frame " << i;
+    previous = published;
+    if (i == 6) {
+      EXPECT_NEAR(result.correction_m, 0.10 - rate_m_s * step_s, 0.01);
+    }
+  }
+  // 55 frames at 3.3 mm: all of the 10 cm is in.
+  const TrackResult settled = tracker_.track(roomFrame(61));
+  EXPECT_EQ(settled.correction_m, 0.0);
+  EXPECT_LT((settled.pose.T_w_c.translation() - settled.map_T_w_c.translation()).norm(), 1e-9);
+}
+
 TEST(Tracker, ResetStartsANewMap) {
   Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
   feed(&tracker, 0, 5);

@@ -76,6 +76,7 @@ class Tracker::Impl {
   TrackResult track(const RgbdFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
     TrackResult result = trackFrame(frame);
+    publish(&result, frame.utime);
     result.track_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     result.pose.utime = frame.utime;
@@ -83,7 +84,11 @@ class Tracker::Impl {
     return result;
   }
 
-  bool applyMap(const MapUpdate& update) { return replica_.apply(update); }
+  bool applyMap(const MapUpdate& update) {
+    const bool known = replica_.apply(update);
+    followMapCorrection();
+    return known;
+  }
   const Map& map() const { return replica_.map(); }
   void load(const LoadedMap& loaded, bool add_keyframes);
 
@@ -98,6 +103,9 @@ class Tracker::Impl {
     have_previous_sbi_ = false;
     extras_.clear();
     keyframes_allowed_ = true;
+    anchor_.reset();
+    offset_ = PublishedOffset{};
+    last_utime_.reset();
   }
 
  private:
@@ -157,6 +165,15 @@ class Tracker::Impl {
   // (depth-aided tracking) and 3-D features (relocalisation from anywhere), made on the
   // keyframe worker so that the frame which makes the keyframe does not wait for them.
   void rememberKeyframe(const Keyframe& keyframe);
+  // Map corrections: after a map update, the tracker's pose moves as the keyframe nearest
+  // it moved, and the published offset takes up the difference (TrackerOptions::correction_*).
+  void followMapCorrection();
+  SE3 published(const SE3& T_w_c) const {
+    return SE3(offset_.rotation * T_w_c.rotation(), T_w_c.translation() + offset_.position);
+  }
+  // Takes in the correction as far as the rates allow since the last frame, then sets the
+  // result's published pose.
+  void publish(TrackResult* result, int64_t utime);
   // A keyframe's extras, waiting for the worker if they are not made yet; null when the
   // keyframe has none.
   const KeyframeExtras* extrasOf(KeyframeId id) const;
@@ -201,6 +218,20 @@ class Tracker::Impl {
   // A point's depth record counts after this many checks at accepted poses.
   static constexpr int kDepthRecordMin = 3;
   std::unordered_map<KeyframeId, std::shared_future<KeyframeExtras>> extras_;
+  // The keyframe nearest the last pose, and its pose then (map corrections are measured on it).
+  struct Anchor {
+    KeyframeId id;
+    SE3 T_w_k;
+  };
+  std::optional<Anchor> anchor_;
+  // Published pose = map pose turned by 'rotation' about the camera centre, then shifted by
+  // 'position' (world frame): the correction not yet taken in.
+  struct PublishedOffset {
+    Vec3 position = Vec3::Zero();
+    Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  };
+  PublishedOffset offset_;
+  std::optional<int64_t> last_utime_;  // of the last frame tracked [us]
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
 
   // Per-frame buffers, reused.
@@ -611,6 +642,51 @@ const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) const {
   return extras == extras_.end() ? nullptr : &extras->second.get();
 }
 
+void Tracker::Impl::followMapCorrection() {
+  if (!anchor_) return;
+  const Keyframe* keyframe = replica_.map().keyframe(anchor_->id);
+  if (!keyframe) {
+    anchor_.reset();
+    return;
+  }
+  // (The rigid motion of the last frame's found points was tried instead: corridor 900's
+  // ATE went to 1.03 m, a few ill-spread points giving wild rotations.)
+  const SE3 correction = keyframe->T_w_c * anchor_->T_w_k.inverse();  // old world -> new, near the camera
+  anchor_->T_w_k = keyframe->T_w_c;
+  const SE3 old_pose = T_c_w_.inverse();
+  const SE3 old_published = published(old_pose);
+  const SE3 new_pose = correction * old_pose;
+  if (options_.follow_map_corrections) T_c_w_ = new_pose.inverse();
+  offset_.position = old_published.translation() - new_pose.translation();
+  offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
+}
+
+void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
+  const double dt_s = last_utime_ ? std::clamp((utime - *last_utime_) * 1e-6, 0.0, 1.0) : 0.0;
+  last_utime_ = utime;
+  const double rate_m = options_.correction_rate_m_s, rate_rad = options_.correction_rate_deg_s * M_PI / 180.0;
+  const double distance = offset_.position.norm();
+  if (rate_m <= 0.0 || distance <= rate_m * dt_s) {
+    offset_.position.setZero();
+  } else {
+    offset_.position *= 1.0 - rate_m * dt_s / distance;
+  }
+  const double angle = Eigen::AngleAxisd(offset_.rotation).angle();
+  if (rate_rad <= 0.0 || angle <= rate_rad * dt_s) {
+    offset_.rotation.setIdentity();
+  } else {
+    offset_.rotation = Eigen::Quaterniond::Identity().slerp(1.0 - rate_rad * dt_s / angle, offset_.rotation);
+  }
+  result->map_T_w_c = result->pose.T_w_c;
+  if (result->status != TrackStatus::kTracked && result->status != TrackStatus::kRelocalised &&
+      result->status != TrackStatus::kLost) {
+    return;  // no pose (initialised: keyframe 0 is the world, no correction yet)
+  }
+  result->pose.T_w_c = published(result->pose.T_w_c);
+  result->correction_m = offset_.position.norm();
+  result->correction_deg = Eigen::AngleAxisd(offset_.rotation).angle() * 180.0 / M_PI;
+}
+
 int Tracker::Impl::cornerCount() const {
   size_t count = 0;
   for (const LevelCorners& level : corners_) count += level.all.size();
@@ -707,6 +783,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
     ++slot->point->times_projected;
     if (slot->found) ++slot->point->times_found;
   }
+  const std::vector<KeyframeId> nearest = replica_.map().nearestKeyframes(T_c_w_.inverse(), 1);
+  if (!nearest.empty()) anchor_ = Anchor{nearest.front(), replica_.map().keyframe(nearest.front())->T_w_c};
   TrackResult result;
   result.status = state == TrackingState::kRelocalised ? TrackStatus::kRelocalised : TrackStatus::kTracked;
   result.pose.state = state;

@@ -95,6 +95,12 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   depth_align.bind(r, s);
   reloc_features.bind(r, s);
   local_map.bind(r, s);
+  r->bind(s, "correction_rate_m_s", &correction_rate_m_s, 0.0, 100.0, "m/s",
+          "the published pose takes in map corrections at most this fast (0: at once)");
+  r->bind(s, "correction_rate_deg_s", &correction_rate_deg_s, 0.0, 3600.0, "deg/s",
+          "...and rotations at most this fast (0: at once)");
+  r->bind(s, "follow_map_corrections", &follow_map_corrections,
+          "the tracker's pose moves with the keyframe nearest it when a map update moves that");
   bindRules(this, r);
 }
 
