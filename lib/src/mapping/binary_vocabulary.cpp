@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
