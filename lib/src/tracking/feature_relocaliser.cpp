@@ -147,7 +147,9 @@ std::optional<FeaturePose> poseFromFeatures(const Features3d& frame, const Featu
   const SE3 T_w_c = T_w_k * T_k_c;
   const PoseOptimizerResult refined = optimisePose(camera, T_w_c.inverse(), observations, pose_options);
   const SE3 pose = refined.ok ? refined.T_c_w.inverse() : T_w_c;
-  return FeaturePose{pose, n, static_cast<int>(best.size())};
+  FeaturePose result{pose, n, static_cast<int>(best.size()), {}};
+  for (int i : best) result.inlier_matches.emplace_back(matches[static_cast<size_t>(i)].frame, matches[static_cast<size_t>(i)].keyframe);
+  return result;
 }
 
 }  // namespace rgbdslam

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -59,6 +60,7 @@ struct FeaturePose {
   SE3 T_w_c;
   int matches = 0;  // after the ratio test
   int inliers = 0;
+  std::vector<std::pair<int, int>> inlier_matches;  // (frame feature, keyframe feature) of each inlier
 };
 
 // The pose of the frame whose features are 'frame' from the features of a keyframe at
