@@ -383,9 +383,10 @@ TEST_F(TrackerMapUpdateTest, SnapshotKeepsProvisionalPointsOfUnacknowledgedKeyfr
 }
 
 // A map update that moves the whole map 10 cm (as a loop closure or the mapper's adjustment
-// moves keyframes under the tracker): the pose in the map moves with it at once, the
-// published pose takes the 10 cm in at the correction rate (0.1 m/s: 3.3 mm a frame at
-// 30 Hz), and says how much is left.
+// moves keyframes under the tracker): the next frame's pose in the map carries the shift
+// (its tracking finds the moved points from the old pose), the published pose takes the
+// 10 cm in at the correction rate (0.1 m/s: 3.3 mm a frame at 30 Hz), and says how much is
+// left.
 TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
   TrackResult last;
   for (size_t i = 1; i <= 5; ++i) last = tracker_.track(roomFrame(i));

@@ -154,10 +154,12 @@ struct TrackerOptions {
   // 0: published pose = map pose at once.
   double correction_rate_m_s = 0.1;    // [m/s]
   double correction_rate_deg_s = 3.0;  // [deg/s]
-  // The tracker's own pose (the next frame's start) moves with the anchor keyframe at once.
-  // false: it stays, and the next frame's tracking finds the corrected map from there (as
-  // before 2026-11-24; corridor 900 ATE 18.9 mm against 10.5 mm, teddy 5.70 against 5.95 mm).
-  bool follow_map_corrections = true;
+  // true: the tracker's own pose (the next frame's start) moves with the anchor keyframe at
+  // once. Off by default: teddy ATE over tracker.random_seed=1..5 was 5.95-7.36 mm (mean
+  // 6.47) with it, 5.47-6.12 (mean 5.74) without; corridor full 34.3 against 31.9 mm; only
+  // corridor 900 gained (10.5 against 18.9 mm). Without it the next frame's tracking finds
+  // the corrected map from the old pose, and only the published pose is smoothed.
+  bool follow_map_corrections = false;
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
 };
