@@ -168,6 +168,9 @@ class Tracker::Impl {
   // Map corrections: after a map update, the tracker's pose moves as the keyframe nearest
   // it moved, and the published offset takes up the difference (TrackerOptions::correction_*).
   void followMapCorrection();
+  // The anchor: the source keyframe of most of the points found (the pose rests on them),
+  // else the keyframe nearest the pose.
+  void setAnchor();
   SE3 published(const SE3& T_w_c) const {
     return SE3(offset_.rotation * T_w_c.rotation(), T_w_c.translation() + offset_.position);
   }
@@ -642,6 +645,25 @@ const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) const {
   return extras == extras_.end() ? nullptr : &extras->second.get();
 }
 
+void Tracker::Impl::setAnchor() {
+  const Keyframe* best = nullptr;
+  int best_count = 0;
+  std::unordered_map<const Keyframe*, int> found_from;
+  for (const PointSlot* slot : stage_) {
+    if (!slot->found || !slot->source) continue;
+    const int count = ++found_from[slot->source];
+    if (count > best_count || (count == best_count && slot->source->id > best->id)) {
+      best = slot->source;
+      best_count = count;
+    }
+  }
+  if (!best) {
+    const std::vector<KeyframeId> nearest = replica_.map().nearestKeyframes(T_c_w_.inverse(), 1);
+    if (!nearest.empty()) best = replica_.map().keyframe(nearest.front());
+  }
+  if (best) anchor_ = Anchor{best->id, best->T_w_c};
+}
+
 void Tracker::Impl::followMapCorrection() {
   if (!anchor_) return;
   const Keyframe* keyframe = replica_.map().keyframe(anchor_->id);
@@ -783,8 +805,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
     ++slot->point->times_projected;
     if (slot->found) ++slot->point->times_found;
   }
-  const std::vector<KeyframeId> nearest = replica_.map().nearestKeyframes(T_c_w_.inverse(), 1);
-  if (!nearest.empty()) anchor_ = Anchor{nearest.front(), replica_.map().keyframe(nearest.front())->T_w_c};
+  setAnchor();
   TrackResult result;
   result.status = state == TrackingState::kRelocalised ? TrackStatus::kRelocalised : TrackStatus::kTracked;
   result.pose.state = state;
