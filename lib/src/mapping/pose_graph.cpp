@@ -58,7 +58,7 @@ namespace {
 // The unwhitened residual of an edge (translation, then 2 x the rotation's vector part), for
 // doubles and Ceres' jets alike.
 template <typename T>
-void relativePoseError(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
+void poseGraphEdgeError(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
                        const SE3& T_a_b, T* error) {
   using Quat = Eigen::Quaternion<T>;
   using V3 = Eigen::Matrix<T, 3, 1>;
@@ -81,7 +81,7 @@ class RelativePoseCost {
   template <typename T>
   bool operator()(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
                   T* residual) const {
-    relativePoseError(t_w_a, q_w_a, t_w_b, q_w_b, T_a_b_, residual);
+    poseGraphEdgeError(t_w_a, q_w_a, t_w_b, q_w_b, T_a_b_, residual);
     for (int i = 0; i < 6; ++i) residual[i] *= T(inv_sigma_[i]);
     return true;
   }
@@ -161,7 +161,7 @@ ceres::LossFunction* makeLoopLoss(const PoseGraphOptions& options) {
   return nullptr;
 }
 
-ceres::Solver::Options solverOptions(const PoseGraphOptions& options) {
+ceres::Solver::Options poseGraphSolverOptions(const PoseGraphOptions& options) {
   ceres::Solver::Options o;
   o.minimizer_type = ceres::TRUST_REGION;
   o.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -184,7 +184,7 @@ ceres::Solver::Options solverOptions(const PoseGraphOptions& options) {
   return o;
 }
 
-SE3 poseOf(const NodeBlock& block) {
+SE3 poseOfNodeBlock(const NodeBlock& block) {
   return SE3(Eigen::Quaterniond(block.q), block.t);
 }
 
@@ -195,7 +195,7 @@ PoseGraphEdgeResidual poseGraphEdgeResidual(const PoseGraphEdge& edge, const SE3
   const Vec3 ta = T_w_a.translation(), tb = T_w_b.translation();
   const Eigen::Vector4d qa = T_w_a.rotation().coeffs(), qb = T_w_b.rotation().coeffs();
   Vec6 e;
-  relativePoseError(ta.data(), qa.data(), tb.data(), qb.data(), edge.T_a_b, e.data());
+  poseGraphEdgeError(ta.data(), qa.data(), tb.data(), qb.data(), edge.T_a_b, e.data());
   const Vec6 whitened = e.cwiseQuotient((Vec6() << edge.sigma_t, edge.sigma_r).finished());
   PoseGraphEdgeResidual r;
   r.whitened_norm = whitened.norm();
@@ -259,7 +259,7 @@ PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions
   }
 
   ceres::Solver::Summary summary;
-  ceres::Solve(solverOptions(options), &problem, &summary);
+  ceres::Solve(poseGraphSolverOptions(options), &problem, &summary);
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
   result.iterations = static_cast<int>(summary.iterations.size()) - 1;  // 0 = the start
@@ -271,7 +271,7 @@ PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions
   result.status = summary.termination_type == ceres::NO_CONVERGENCE
                       ? PoseGraphStatus::kMaxIterations
                       : PoseGraphStatus::kConverged;
-  for (size_t i = 0; i < graph.nodes.size(); ++i) result.poses[i].T_w_c = poseOf(blocks[i]);
+  for (size_t i = 0; i < graph.nodes.size(); ++i) result.poses[i].T_w_c = poseOfNodeBlock(blocks[i]);
   return finish();
 }
 
