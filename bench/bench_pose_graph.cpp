@@ -3,7 +3,8 @@
 // apart; odometry edges between consecutive keyframes with Gaussian noise (1 cm, 0.06 deg
 // per axis) and a yaw bias of 0.03 deg per step, weighted as 1 cm, 0.17 deg; loop edges
 // (2 cm, 0.5 deg) from every 25th keyframe of laps after the first to the same place in
-// the first lap, and from the last keyframe to keyframe 0; keyframe 0 fixed. Nodes start at the chained odometry.
+// the first lap, and from the last keyframe to keyframe 0; keyframe 0 fixed. Nodes start
+// at the chained odometry.
 // Counters: keyframes, edges, loop_edges, iterations, max_error_before / _after [m] (the
 // largest keyframe position error against the truth), loops_disagreeing (loop edges over
 // disagree_sigmas after the solve). Time = one optimisePoseGraph() call.
@@ -87,7 +88,8 @@ PoseGraph makeFlight(int num_keyframes, int* loop_edges) {
 double maxError(const std::vector<KeyframePose>& poses) {
   double worst = 0.0;
   for (const KeyframePose& p : poses) {
-    worst = std::max(worst, (p.T_w_c.translation() - lapPose(static_cast<int>(p.id)).translation()).norm());
+    const Vec3 truth = lapPose(static_cast<int>(p.id)).translation();
+    worst = std::max(worst, (p.T_w_c.translation() - truth).norm());
   }
   return worst;
 }

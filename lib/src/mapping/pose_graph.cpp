@@ -76,7 +76,8 @@ void poseGraphEdgeError(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T*
 class RelativePoseCost {
  public:
   explicit RelativePoseCost(const PoseGraphEdge& edge)
-      : T_a_b_(edge.T_a_b), inv_sigma_((Vec6() << edge.sigma_t, edge.sigma_r).finished().cwiseInverse()) {}
+      : T_a_b_(edge.T_a_b),
+        inv_sigma_((Vec6() << edge.sigma_t, edge.sigma_r).finished().cwiseInverse()) {}
 
   template <typename T>
   bool operator()(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
@@ -271,7 +272,9 @@ PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions
   result.status = summary.termination_type == ceres::NO_CONVERGENCE
                       ? PoseGraphStatus::kMaxIterations
                       : PoseGraphStatus::kConverged;
-  for (size_t i = 0; i < graph.nodes.size(); ++i) result.poses[i].T_w_c = poseOfNodeBlock(blocks[i]);
+  for (size_t i = 0; i < graph.nodes.size(); ++i) {
+    result.poses[i].T_w_c = poseOfNodeBlock(blocks[i]);
+  }
   return finish();
 }
 
