@@ -227,5 +227,29 @@ TEST(PoseGraph, EdgeResidualMeasuresTheDisagreement) {
   EXPECT_GT(r.whitened_norm, 3.0);
 }
 
+// Analytic Jacobians against central differences of left perturbations, far from the
+// solution (an edge 20 deg and 0.5 m off), so that no small-error shortcut can pass.
+TEST(PoseGraph, EdgeJacobiansMatchNumericDifferentiation) {
+  PoseGraphEdge edge = pgEdge(0, 1, SE3(expSO3(Vec3(0.1, -0.2, 0.3)), Vec3(0.5, -1.0, 0.2)),
+                              PoseGraphEdgeKind::kLoop);
+  const SE3 T_w_a(expSO3(Vec3(0.4, 0.1, -0.7)), Vec3(1.0, 2.0, -0.5));
+  const SE3 T_w_b(expSO3(Vec3(-0.2, 0.5, 0.9)), Vec3(2.5, 1.0, 0.3));
+  Mat6 d_e_d_a, d_e_d_b;
+  poseGraphEdgeError(edge, T_w_a, T_w_b, &d_e_d_a, &d_e_d_b);
+  constexpr double kH = 1e-6;
+  Mat6 numeric_a, numeric_b;
+  for (int i = 0; i < 6; ++i) {
+    const Vec6 step = Vec6::Unit(i) * kH;
+    numeric_a.col(i) =
+        (poseGraphEdgeError(edge, SE3::exp(step) * T_w_a, T_w_b, nullptr, nullptr) -
+         poseGraphEdgeError(edge, SE3::exp(-step) * T_w_a, T_w_b, nullptr, nullptr)) / (2 * kH);
+    numeric_b.col(i) =
+        (poseGraphEdgeError(edge, T_w_a, SE3::exp(step) * T_w_b, nullptr, nullptr) -
+         poseGraphEdgeError(edge, T_w_a, SE3::exp(-step) * T_w_b, nullptr, nullptr)) / (2 * kH);
+  }
+  EXPECT_LT((d_e_d_a - numeric_a).cwiseAbs().maxCoeff(), 1e-7) << d_e_d_a << "\n\n" << numeric_a;
+  EXPECT_LT((d_e_d_b - numeric_b).cwiseAbs().maxCoeff(), 1e-7) << d_e_d_b << "\n\n" << numeric_b;
+}
+
 }  // namespace
 }  // namespace rgbdslam

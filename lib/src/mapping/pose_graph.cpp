@@ -2,11 +2,16 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
+#include <array>
+
 #include <chrono>
 #include <cmath>
 #include <memory>
 #include <numeric>
 #include <unordered_map>
+
+#include "rgbdslam/mapping/bundle_adjuster.h"
 
 namespace rgbdslam {
 
@@ -57,44 +62,39 @@ namespace {
 
 // The unwhitened residual of an edge (translation, then 2 x the rotation's vector part), for
 // doubles and Ceres' jets alike.
-template <typename T>
-void poseGraphEdgeError(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
-                       const SE3& T_a_b, T* error) {
-  using Quat = Eigen::Quaternion<T>;
-  using V3 = Eigen::Matrix<T, 3, 1>;
-  const Eigen::Map<const Quat> qa(q_w_a), qb(q_w_b);
-  const Eigen::Map<const V3> ta(t_w_a), tb(t_w_b);
-  const Quat q_a_w = qa.conjugate();
-  const Quat q_a_b_est = q_a_w * qb;
-  const V3 t_a_b_est = q_a_w * (tb - ta);
-  const Quat dq = T_a_b.rotation().template cast<T>() * q_a_b_est.conjugate();
-  Eigen::Map<Eigen::Matrix<T, 6, 1>> e(error);
-  e.template head<3>() = t_a_b_est - T_a_b.translation().template cast<T>();
-  e.template tail<3>() = T(2.0) * dq.vec();
-}
-
-class RelativePoseCost {
+// Whitened residual of one edge on two pose blocks (ba_ceres layout: q then t, T_w_k), with
+// the Jacobians in the bundle adjuster's lifted form: 6 tangent columns, then a zero column
+// (ba_ceres::PoseManifold::PlusJacobian is [I6; 0]).
+class RelativePoseCost final
+    : public ceres::SizedCostFunction<6, ba_ceres::kPoseBlockSize, ba_ceres::kPoseBlockSize> {
  public:
-  explicit RelativePoseCost(const PoseGraphEdge& edge)
-      : T_a_b_(edge.T_a_b),
-        inv_sigma_((Vec6() << edge.sigma_t, edge.sigma_r).finished().cwiseInverse()) {}
+  explicit RelativePoseCost(const PoseGraphEdge& edge) : edge_(edge) {
+    inv_sigma_ << edge.sigma_t.cwiseInverse(), edge.sigma_r.cwiseInverse();
+  }
 
-  template <typename T>
-  bool operator()(const T* t_w_a, const T* q_w_a, const T* t_w_b, const T* q_w_b,
-                  T* residual) const {
-    poseGraphEdgeError(t_w_a, q_w_a, t_w_b, q_w_b, T_a_b_, residual);
-    for (int i = 0; i < 6; ++i) residual[i] *= T(inv_sigma_[i]);
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    using LiftedJacobian =
+        Eigen::Matrix<double, 6, ba_ceres::kPoseBlockSize, Eigen::RowMajor>;
+    const bool want = jacobians != nullptr && (jacobians[0] != nullptr || jacobians[1] != nullptr);
+    Mat6 d_e_d_a, d_e_d_b;
+    const Vec6 e = poseGraphEdgeError(edge_, ba_ceres::poseFromBlock(parameters[0]),
+                                      ba_ceres::poseFromBlock(parameters[1]),
+                                      want ? &d_e_d_a : nullptr, want ? &d_e_d_b : nullptr);
+    Eigen::Map<Vec6> residual(residuals);
+    residual = inv_sigma_.asDiagonal() * e;
+    for (int i = 0; want && i < 2; ++i) {
+      if (jacobians[i] == nullptr) continue;
+      Eigen::Map<LiftedJacobian> J(jacobians[i]);
+      J.leftCols<6>() = inv_sigma_.asDiagonal() * (i == 0 ? d_e_d_a : d_e_d_b);
+      J.rightCols<1>().setZero();
+    }
     return true;
   }
 
  private:
-  SE3 T_a_b_;
+  PoseGraphEdge edge_;
   Vec6 inv_sigma_;
-};
-
-struct NodeBlock {
-  Eigen::Vector3d t;
-  Eigen::Vector4d q;  // Eigen's coefficient order x, y, z, w (EigenQuaternionManifold)
 };
 
 int findRoot(std::vector<int>* parent, int i) {
@@ -185,18 +185,39 @@ ceres::Solver::Options poseGraphSolverOptions(const PoseGraphOptions& options) {
   return o;
 }
 
-SE3 poseOfNodeBlock(const NodeBlock& block) {
-  return SE3(Eigen::Quaterniond(block.q), block.t);
-}
 
 }  // namespace
 
+Vec6 poseGraphEdgeError(const PoseGraphEdge& edge, const SE3& T_w_a, const SE3& T_w_b,
+                        Mat6* d_e_d_a, Mat6* d_e_d_b) {
+  const Mat3 R_a_w = T_w_a.rotationMatrix().transpose();
+  const Vec3 t_w_b = T_w_b.translation();
+  const Eigen::Quaterniond M_q = edge.T_a_b.rotation() * T_w_b.rotation().conjugate();
+  const Eigen::Quaterniond dq = M_q * T_w_a.rotation();  // q_a_b (q_w_a^-1 q_w_b)^-1
+  Vec6 e;
+  e.head<3>() = R_a_w * (t_w_b - T_w_a.translation()) - edge.T_a_b.translation();
+  e.tail<3>() = 2.0 * dq.vec();
+  if (d_e_d_a != nullptr && d_e_d_b != nullptr) {
+    // Left perturbations T <- exp(delta) T, delta = (v, w): t <- t + v - [t]x w,
+    // q <- exp(w) q. The rotation part: dq <- [1, M w / 2] dq for a (M = R_a_b R_w_b^T),
+    // the same with -w for b, and d vec([1, u/2] dq) / du = (dq_w I - [dq_vec]x) / 2.
+    const Mat3 d_er_d_u = dq.w() * Mat3::Identity() - skew(dq.vec());
+    const Mat3 d_er_d_wa = d_er_d_u * M_q.toRotationMatrix();
+    d_e_d_a->setZero();
+    d_e_d_a->block<3, 3>(0, 0) = -R_a_w;
+    d_e_d_a->block<3, 3>(0, 3) = R_a_w * skew(t_w_b);
+    d_e_d_a->block<3, 3>(3, 3) = d_er_d_wa;
+    d_e_d_b->setZero();
+    d_e_d_b->block<3, 3>(0, 0) = R_a_w;
+    d_e_d_b->block<3, 3>(0, 3) = -R_a_w * skew(t_w_b);
+    d_e_d_b->block<3, 3>(3, 3) = -d_er_d_wa;
+  }
+  return e;
+}
+
 PoseGraphEdgeResidual poseGraphEdgeResidual(const PoseGraphEdge& edge, const SE3& T_w_a,
                                             const SE3& T_w_b, double disagree_sigmas) {
-  const Vec3 ta = T_w_a.translation(), tb = T_w_b.translation();
-  const Eigen::Vector4d qa = T_w_a.rotation().coeffs(), qb = T_w_b.rotation().coeffs();
-  Vec6 e;
-  poseGraphEdgeError(ta.data(), qa.data(), tb.data(), qb.data(), edge.T_a_b, e.data());
+  const Vec6 e = poseGraphEdgeError(edge, T_w_a, T_w_b, nullptr, nullptr);
   const Vec6 whitened = e.cwiseQuotient((Vec6() << edge.sigma_t, edge.sigma_r).finished());
   PoseGraphEdgeResidual r;
   r.whitened_norm = whitened.norm();
@@ -232,31 +253,25 @@ PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions
     return result.status == PoseGraphStatus::kNoEdges ? finish() : result;
   }
 
-  std::vector<NodeBlock> blocks(graph.nodes.size());
+  // One block per node: T_w_k as ba_ceres lays a pose out (q x, y, z, w, then t).
+  std::vector<std::array<double, ba_ceres::kPoseBlockSize>> blocks(graph.nodes.size());
   for (size_t i = 0; i < graph.nodes.size(); ++i) {
-    blocks[i].t = graph.nodes[i].T_w_k.translation();
-    blocks[i].q = graph.nodes[i].T_w_k.rotation().coeffs();
+    ba_ceres::poseToBlock(graph.nodes[i].T_w_k, blocks[i].data());
   }
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::EigenQuaternionManifold quaternion_manifold;
+  ba_ceres::PoseManifold pose_manifold;  // T <- exp(delta) T
   for (const PoseGraphEdge& edge : graph.edges) {
-    NodeBlock& a = blocks[index[edge.from]];
-    NodeBlock& b = blocks[index[edge.to]];
-    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseCost, 6, 3, 4, 3, 4>(
-        new RelativePoseCost(edge));
     ceres::LossFunction* loss = edge.kind == PoseGraphEdgeKind::kLoop ? makeLoopLoss(options)
                                                                        : nullptr;
-    problem.AddResidualBlock(cost, loss, a.t.data(), a.q.data(), b.t.data(), b.q.data());
+    problem.AddResidualBlock(new RelativePoseCost(edge), loss, blocks[index[edge.from]].data(),
+                             blocks[index[edge.to]].data());
   }
   for (size_t i = 0; i < graph.nodes.size(); ++i) {
-    if (!problem.HasParameterBlock(blocks[i].q.data())) continue;  // a node without edges
-    problem.SetManifold(blocks[i].q.data(), &quaternion_manifold);
-    if (graph.nodes[i].fixed) {
-      problem.SetParameterBlockConstant(blocks[i].t.data());
-      problem.SetParameterBlockConstant(blocks[i].q.data());
-    }
+    if (!problem.HasParameterBlock(blocks[i].data())) continue;  // a node without edges
+    problem.SetManifold(blocks[i].data(), &pose_manifold);
+    if (graph.nodes[i].fixed) problem.SetParameterBlockConstant(blocks[i].data());
   }
 
   ceres::Solver::Summary summary;
@@ -273,7 +288,7 @@ PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions
                       ? PoseGraphStatus::kMaxIterations
                       : PoseGraphStatus::kConverged;
   for (size_t i = 0; i < graph.nodes.size(); ++i) {
-    result.poses[i].T_w_c = poseOfNodeBlock(blocks[i]);
+    result.poses[i].T_w_c = ba_ceres::poseFromBlock(blocks[i].data());
   }
   return finish();
 }

@@ -7,12 +7,13 @@
 // Model: for an edge a -> b with measurement T_a_b and 1-sigma noise (sigma_t [m] per axis,
 // sigma_r [rad] per axis, both in frame a), the residual is
 //   e = W * [ R_w_a^T (t_w_b - t_w_a) - t_a_b ;  2 vec(q_a_b * (q_w_a^-1 q_w_b)^-1) ]
-// (translation first, then rotation, as SE3's tangent), W = diag(1 / sigma). Odometry and
+// (translation first, then rotation, as SE3's tangent), W = diag(1 / sigma), with analytic
+// Jacobians. Odometry and
 // covisibility edges are quadratic; loop edges go through a Cauchy loss of scale
 // loop_loss_scale sigmas, so a wrong loop pulls with a bounded force and the map moves by
 // about c^2 sigma_chain^2 / D (D the loop's disagreement; docs/design.md "Pose graph").
-// Solved by Levenberg-Marquardt (Ceres, sparse normal Cholesky), each pose a translation
-// and an Eigen quaternion (ceres::EigenQuaternionManifold).
+// Solved by Levenberg-Marquardt (Ceres, sparse normal Cholesky), each pose a block and
+// manifold as in bundle adjustment (ba_ceres::PoseManifold: T_w_k <- exp(delta) T_w_k).
 //
 // Call order: fill a PoseGraph (nodes with their current T_w_k, at least one fixed; edges
 // naming nodes by keyframe id), call optimisePoseGraph(), check the status, read the new
@@ -117,7 +118,14 @@ struct PoseGraphResult {
 // says what is wrong and the poses are the input ones.
 PoseGraphResult optimisePoseGraph(const PoseGraph& graph, const PoseGraphOptions& options);
 
-// The residual of one edge for the given poses (used by the result; exposed for tests).
+// The unwhitened error e of an edge (the model above) and, when both pointers are given, its
+// Jacobians with respect to left perturbations T <- exp(delta) T of T_w_a and T_w_b (delta
+// = (v, w) as SE3::exp, in the world frame). Checked numerically in the tests.
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+Vec6 poseGraphEdgeError(const PoseGraphEdge& edge, const SE3& T_w_a, const SE3& T_w_b,
+                        Mat6* d_e_d_a, Mat6* d_e_d_b);
+
+// The residual of one edge for the given poses (used by the result).
 PoseGraphEdgeResidual poseGraphEdgeResidual(const PoseGraphEdge& edge, const SE3& T_w_a,
                                             const SE3& T_w_b, double disagree_sigmas);
 
