@@ -8,10 +8,11 @@
 // sigma_r [rad] per axis, both in frame a), the residual is
 //   e = W * [ R_w_a^T (t_w_b - t_w_a) - t_a_b ;  2 vec(q_a_b * (q_w_a^-1 q_w_b)^-1) ]
 // (translation first, then rotation, as SE3's tangent), W = diag(1 / sigma), with analytic
-// Jacobians. Odometry and
-// covisibility edges are quadratic; loop edges go through a Cauchy loss of scale
-// loop_loss_scale sigmas, so a wrong loop pulls with a bounded force and the map moves by
-// about c^2 sigma_chain^2 / D (D the loop's disagreement; docs/design.md "Pose graph").
+// Jacobians. Odometry and covisibility edges are quadratic; loop edges go through a Cauchy
+// loss of scale loop_loss_scale sigmas, so a wrong loop pulls with a bounded force and the
+// map moves by about c^2 sigma_chain^2 / D (D the loop's disagreement). The same choice
+// leaves a correct loop open when its disagreement exceeds about c sigma_chain^2 /
+// (2 sigma_loop): odometry sigmas must cover the drift (docs/design.md "Pose graph").
 // Solved by Levenberg-Marquardt (Ceres, sparse normal Cholesky), each pose a block and
 // manifold as in bundle adjustment (ba_ceres::PoseManifold: T_w_k <- exp(delta) T_w_k).
 //
