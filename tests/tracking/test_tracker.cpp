@@ -413,6 +413,7 @@ TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
     const Vec3 truth_step = (room().groundTruthPose(0).inverse() * room().groundTruthPose(i)).translation() -
                             (room().groundTruthPose(0).inverse() * room().groundTruthPose(i - 1)).translation();
     EXPECT_LT(((published - previous) - truth_step).norm(), rate_m_s * step_s + 0.005) << "frame " << i;
+    EXPECT_EQ(result.pose.state, TrackingState::kTracking) << "frame " << i;
     previous = published;
     if (i == 6) {
       EXPECT_NEAR(result.correction_m, 0.10 - rate_m_s * step_s, 0.01);
@@ -422,6 +423,42 @@ TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
   const TrackResult settled = tracker_.track(roomFrame(61));
   EXPECT_EQ(settled.correction_m, 0.0);
   EXPECT_LT((settled.pose.T_w_c.translation() - settled.map_T_w_c.translation()).norm(), 1e-9);
+}
+
+// The same 10 cm correction published at once (correction rate 0): the published pose jumps,
+// and the frames whose step leaves the motion's extrapolation by over 2 cm are reported
+// dodgy whatever their fit's sigma (the jump, and the next frame, extrapolated across it).
+TEST(Tracker, ReportsAStepAgainstTheMotionDodgy) {
+  TrackerOptions options;
+  options.correction_rate_m_s = 0.0;
+  options.correction_rate_deg_s = 0.0;
+  Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
+  ASSERT_EQ(tracker.track(roomFrame(0)).status, Status::kInitialised);
+  TrackResult before;
+  for (size_t i = 1; i <= 5; ++i) {
+    before = tracker.track(roomFrame(i));
+    ASSERT_EQ(before.pose.state, TrackingState::kTracking);
+  }
+  const Vec3 shift(0.10, 0.0, 0.0);
+  MapUpdate moved;
+  moved.map_id = 1;
+  moved.version = 1;
+  moved.acked_keyframes = {0};
+  moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
+  for (const auto& [id, point] : tracker.map().points()) {
+    MapPointData data = point.data();
+    data.p_w += shift;
+    moved.points.push_back(data);
+  }
+  ASSERT_TRUE(tracker.applyMap(moved));
+  const TrackResult jump = tracker.track(roomFrame(6));
+  ASSERT_EQ(jump.status, Status::kTracked);
+  EXPECT_LT((jump.pose.T_w_c.translation() - jump.map_T_w_c.translation()).norm(), 1e-9);  // published at once
+  EXPECT_GT((jump.pose.T_w_c.translation() - before.pose.T_w_c.translation()).norm(), 0.08);  // a jump
+  EXPECT_LT(jump.pose_sigma_m * 3.0 * std::sqrt(2.0), 0.02);  // the fit alone would call it good
+  EXPECT_EQ(jump.pose.state, TrackingState::kDodgy);
+  EXPECT_EQ(tracker.track(roomFrame(7)).pose.state, TrackingState::kDodgy);
+  EXPECT_EQ(tracker.track(roomFrame(8)).pose.state, TrackingState::kTracking);
 }
 
 TEST(Tracker, ResetStartsANewMap) {

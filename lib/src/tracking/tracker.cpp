@@ -106,6 +106,7 @@ class Tracker::Impl {
     anchor_.reset();
     offset_ = PublishedOffset{};
     last_utime_.reset();
+    published_history_.clear();
   }
 
  private:
@@ -177,6 +178,12 @@ class Tracker::Impl {
   // Takes in the correction as far as the rates allow since the last frame, then sets the
   // result's published pose.
   void publish(TrackResult* result, int64_t utime);
+  // A pose reported tracking whose published position leaves the constant-velocity
+  // extrapolation of the last two by more than QualityOptions::good_step_m is reported
+  // dodgy: a step the flight controller would feel as a jump, whatever the fit's sigma says
+  // (corridor 900: poses 2.6-3.6 cm off with sigmas of 3 mm). A vehicle's own acceleration
+  // moves it a * dt^2 from that extrapolation: 1.1 cm at 10 m/s^2 and 30 Hz.
+  void holdStepAgainstMotion(TrackResult* result, int64_t utime);
   // A keyframe's extras, waiting for the worker if they are not made yet; null when the
   // keyframe has none.
   const KeyframeExtras* extrasOf(KeyframeId id) const;
@@ -235,6 +242,9 @@ class Tracker::Impl {
   };
   PublishedOffset offset_;
   std::optional<int64_t> last_utime_;  // of the last frame tracked [us]
+  // The last two published positions and their times, newest first (reset when a frame has
+  // no pose): the motion a reported step is held against (QualityOptions::good_step_m).
+  std::vector<std::pair<int64_t, Vec3>> published_history_;
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
 
   // Per-frame buffers, reused.
@@ -702,11 +712,33 @@ void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
   result->map_T_w_c = result->pose.T_w_c;
   if (result->status != TrackStatus::kTracked && result->status != TrackStatus::kRelocalised &&
       result->status != TrackStatus::kLost) {
+    published_history_.clear();
     return;  // no pose (initialised: keyframe 0 is the world, no correction yet)
   }
   result->pose.T_w_c = published(result->pose.T_w_c);
+  holdStepAgainstMotion(result, utime);
   result->correction_m = offset_.position.norm();
   result->correction_deg = Eigen::AngleAxisd(offset_.rotation).angle() * 180.0 / M_PI;
+}
+
+void Tracker::Impl::holdStepAgainstMotion(TrackResult* result, int64_t utime) {
+  if (result->status == TrackStatus::kLost) {
+    published_history_.clear();
+    return;
+  }
+  const Vec3 position = result->pose.T_w_c.translation();
+  const double limit = options_.quality.good_step_m;
+  if (result->pose.state == TrackingState::kTracking && mode_ != SlamMode::kMono && limit > 0.0 &&
+      published_history_.size() == 2) {
+    const auto& [t1, p1] = published_history_[0];
+    const auto& [t2, p2] = published_history_[1];
+    if (utime > t1 && t1 > t2) {
+      const Vec3 extrapolated = p1 + (p1 - p2) * (static_cast<double>(utime - t1) / static_cast<double>(t1 - t2));
+      if ((position - extrapolated).norm() > limit) result->pose.state = TrackingState::kDodgy;
+    }
+  }
+  published_history_.insert(published_history_.begin(), {utime, position});
+  if (published_history_.size() > 2) published_history_.pop_back();
 }
 
 int Tracker::Impl::cornerCount() const {
