@@ -320,6 +320,21 @@ TEST(Tracker, RelocalisesFromTheLastPoseOnADodgyButFixedView) {
   EXPECT_LT(positionError(result.pose.T_w_c, 152), 0.02);
 }
 
+// Version 1 of map 1: keyframe 0 (acknowledged) and every point of 'map' moved by 'shift'.
+MapUpdate wholeMapShiftedForTrackerTest(const Map& map, const Vec3& shift) {
+  MapUpdate moved;
+  moved.map_id = 1;
+  moved.version = 1;
+  moved.acked_keyframes = {0};
+  moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
+  for (const auto& [id, point] : map.points()) {
+    MapPointData data = point.data();
+    data.p_w += shift;
+    moved.points.push_back(data);
+  }
+  return moved;
+}
+
 class TrackerMapUpdateTest : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_EQ(tracker_.track(roomFrame(0)).status, Status::kInitialised); }
@@ -392,15 +407,7 @@ TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
   for (size_t i = 1; i <= 5; ++i) last = tracker_.track(roomFrame(i));
   ASSERT_EQ(last.pose.state, TrackingState::kTracking);
   const Vec3 shift(0.10, 0.0, 0.0);
-  MapUpdate moved = update(1);
-  moved.acked_keyframes = {0};
-  moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
-  for (const auto& [id, point] : tracker_.map().points()) {
-    MapPointData data = point.data();
-    data.p_w += shift;
-    moved.points.push_back(data);
-  }
-  EXPECT_TRUE(tracker_.applyMap(moved));
+  EXPECT_TRUE(tracker_.applyMap(wholeMapShiftedForTrackerTest(tracker_.map(), shift)));
   const double step_s = 1.0 / 30.0, rate_m_s = TrackerOptions{}.correction_rate_m_s;
   Vec3 previous = last.pose.T_w_c.translation();
   for (size_t i = 6; i <= 60; ++i) {
@@ -439,18 +446,7 @@ TEST(Tracker, ReportsAStepAgainstTheMotionDodgy) {
     before = tracker.track(roomFrame(i));
     ASSERT_EQ(before.pose.state, TrackingState::kTracking);
   }
-  const Vec3 shift(0.10, 0.0, 0.0);
-  MapUpdate moved;
-  moved.map_id = 1;
-  moved.version = 1;
-  moved.acked_keyframes = {0};
-  moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
-  for (const auto& [id, point] : tracker.map().points()) {
-    MapPointData data = point.data();
-    data.p_w += shift;
-    moved.points.push_back(data);
-  }
-  ASSERT_TRUE(tracker.applyMap(moved));
+  ASSERT_TRUE(tracker.applyMap(wholeMapShiftedForTrackerTest(tracker.map(), Vec3(0.10, 0.0, 0.0))));
   const TrackResult jump = tracker.track(roomFrame(6));
   ASSERT_EQ(jump.status, Status::kTracked);
   EXPECT_LT((jump.pose.T_w_c.translation() - jump.map_T_w_c.translation()).norm(), 1e-9);  // published at once
