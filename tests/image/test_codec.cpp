@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace rgbdslam {
@@ -50,6 +51,57 @@ TEST(Codec, PngRoundTripIsExact) {
   auto back = decodeImage(bytes.data(), bytes.size(), 1, 64, 48);
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(cv::norm(grey, *back, cv::NORM_INF), 0.0);
+}
+
+
+// The offset of a JPEG's frame header (SOFn) marker, found by the same walk a decoder does.
+size_t jpegFrameHeader(const std::vector<uint8_t>& jpeg) {
+  size_t at = 2;
+  while (at + 4 <= jpeg.size()) {
+    const uint8_t marker = jpeg[at + 1];
+    if (marker >= 0xC0 && marker <= 0xC3) return at;
+    at += 2 + ((jpeg[at + 2] << 8) | jpeg[at + 3]);
+  }
+  return 0;
+}
+
+TEST(Codec, ReadsTheDeclaredSizeWithoutDecoding) {
+  cv::Mat image(48, 64, CV_8UC3, cv::Scalar(10, 20, 30));
+  for (const auto& bytes : {encodeJpeg(image, 90), encodePng(image)}) {
+    const auto size = encodedImageSize(bytes.data(), bytes.size());
+    ASSERT_TRUE(size) << size.error();
+    EXPECT_EQ(*size, cv::Size(64, 48));
+    EXPECT_FALSE(encodedImageSize(bytes.data(), 6));  // cut off before the size
+  }
+  std::vector<uint8_t> bmp;
+  cv::imencode(".bmp", image, bmp);
+  const auto refused = decodeImage(bmp.data(), bmp.size(), 3, 64, 48);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("neither JPEG nor PNG"), std::string::npos) << refused.error();
+}
+
+// A few bytes of JPEG header may declare a 30000x30000 image: decoding it would allocate
+// 2.7 GB before the size is compared (an out-of-memory the fuzzer found in an LCM log). The
+// header is read first, so it is refused without the allocation.
+TEST(Codec, AHeaderDeclaringAHugeImageIsRefusedBeforeDecoding) {
+  auto bytes = encodeJpeg(cv::Mat(48, 64, CV_8UC1, cv::Scalar(7)), 90);
+  const size_t sof = jpegFrameHeader(bytes);
+  ASSERT_GT(sof, 0u);
+  for (size_t i : {sof + 5, sof + 7}) {  // height, width: big-endian 16 bits each
+    bytes[i] = 30000 >> 8;
+    bytes[i + 1] = 30000 & 0xFF;
+  }
+  const auto size = encodedImageSize(bytes.data(), bytes.size());
+  ASSERT_TRUE(size) << size.error();
+  EXPECT_EQ(*size, cv::Size(30000, 30000));
+  const auto refused = decodeImage(bytes.data(), bytes.size(), 1, 64, 48);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("header says 30000x30000, expected 64x48"), std::string::npos) << refused.error();
+
+  auto png = encodePng(cv::Mat(48, 64, CV_8UC1, cv::Scalar(7)));
+  png[16] = png[20] = 0x7F;  // width and height 2^31 - ...
+  EXPECT_FALSE(encodedImageSize(png.data(), png.size()));
+  EXPECT_FALSE(decodeImage(png.data(), png.size(), 1, 64, 48));
 }
 
 }  // namespace

@@ -9,6 +9,8 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "rgbdslam/image/codec.h"
+
 namespace rgbdslam {
 namespace {
 
@@ -104,7 +106,28 @@ FrameResult badFrame(const std::string& message) {
   return result;
 }
 
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
+
+// An image file of the camera's size, decoded as stored. Its header is read first, so a
+// file that declares a huge image is refused before the decoder allocates it.
+Expected<cv::Mat> readImage(const std::string& file, const PinholeCamera& camera) {
+  constexpr std::streamoff kMaxFileBytes = std::streamoff{1} << 30;  // [bytes], 4x a raw 8192^2 16-bit image
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
+  if (!in) return Error{file + ": cannot be opened"};
+  const std::streamoff bytes = in.tellg();
+  if (bytes <= 0 || bytes > kMaxFileBytes) return Error{file + ": has " + std::to_string(bytes) + " bytes, not a frame image"};
+  std::vector<uint8_t> data(static_cast<size_t>(bytes));
+  in.seekg(0);
+  if (!in.read(reinterpret_cast<char*>(data.data()), bytes)) return Error{file + ": cannot be read"};
+  const Expected<cv::Size> size = encodedImageSize(data.data(), data.size());
+  if (!size) return Error{file + ": cannot decode (" + size.error() + ")"};
+  if (size->width != camera.width || size->height != camera.height) {
+    return Error{file + ": image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
+                 " but the camera file says " + std::to_string(camera.width) + "x" + std::to_string(camera.height)};
+  }
+  Expected<cv::Mat> image = decodeImage(data.data(), data.size(), cv::IMREAD_UNCHANGED, *size);
+  if (!image) return Error{file + ": cannot decode (" + image.error() + ")"};
+  return image;
+}
 
 }  // namespace
 
@@ -133,26 +156,21 @@ FrameResult TumSource::read(size_t i) const {
   const std::string rgb_file = (fs::path(dir_) / e.rgb_path).string();
   FrameResult result;
   RgbdFrame& frame = result.frame;
-  frame.colour = cv::imread(rgb_file, cv::IMREAD_UNCHANGED);
-  if (frame.colour.empty()) return badFrame(rgb_file + ": cannot decode (missing, truncated or not an image)");
+  Expected<cv::Mat> colour = readImage(rgb_file, camera_);
+  if (!colour) return badFrame(colour.error());
+  frame.colour = *colour;
   if (frame.colour.depth() != CV_8U) return badFrame(rgb_file + ": colour image is not 8-bit");
   if (frame.colour.channels() == 4) cv::cvtColor(frame.colour, frame.colour, cv::COLOR_BGRA2BGR);
   if (frame.colour.channels() == 1) cv::cvtColor(frame.colour, frame.colour, cv::COLOR_GRAY2BGR);
-  if (frame.colour.cols != camera_.width || frame.colour.rows != camera_.height) {
-    return badFrame(rgb_file + ": image is " + sizeText(frame.colour) + " but the camera file says " +
-                    std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
-  }
   if (!e.depth_path.empty()) {
     const std::string depth_file = (fs::path(dir_) / e.depth_path).string();
-    frame.depth = cv::imread(depth_file, cv::IMREAD_UNCHANGED);
-    if (frame.depth.empty()) return badFrame(depth_file + ": cannot decode (missing, truncated or not an image)");
+    Expected<cv::Mat> depth = readImage(depth_file, camera_);
+    if (!depth) return badFrame(depth.error());
+    frame.depth = *depth;
     if (frame.depth.type() != CV_16UC1) {
       return badFrame(depth_file + ": depth must be a 16-bit single-channel image, this one is " +
                       std::to_string(frame.depth.elemSize1() * 8) + "-bit with " +
                       std::to_string(frame.depth.channels()) + " channel(s)");
-    }
-    if (frame.depth.size() != frame.colour.size()) {
-      return badFrame(depth_file + ": depth is " + sizeText(frame.depth) + ", colour is " + sizeText(frame.colour));
     }
   }
   frame.utime = static_cast<int64_t>(std::llround(e.t_rgb * 1e6));
