@@ -3,8 +3,10 @@
 // (MAPPER_STATUS), and journals its keyframes so a restart loses nothing. See --help.
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "common/cli.h"
+#include "common/map_start.h"
 #include "common/process.h"
 #include "common/slam_config.h"
 #include "rgbd-mapper/mapper_node.h"
@@ -19,6 +21,9 @@ CommandLine makeCommandLine() {
   cli.option("camera", "FILE", "camera calibration YAML (the tracker's camera)");
   addSlamConfigOptions(cli);
   cli.option("state-dir", "DIR", "folder of the persisted map (journal); 'none' persists nothing", "mapper-state");
+  cli.option("load-map", "FILE", "start from the map in FILE (made with this camera and mode) and serve it as map --map-id "
+             "to a tracker started with the same file and id; a restart repeats both (its journal then holds what was added)");
+  cli.option("map-id", "ID", "with --load-map: the id the map is served as (> 0; the tracker's --map-id)");
   cli.flag("fresh", "start a new map: move an existing journal aside (map.journal.old) first");
   // Channels and periods are configuration (sections channels, mapper_node, sync).
   addLcmUrlOption(cli);
@@ -32,6 +37,24 @@ Status moveJournalAside(const std::string& dir) {
   if (!std::filesystem::exists(journal)) return Status{};
   std::filesystem::rename(journal, journal.string() + ".old", error);
   if (error) return Error{"cannot move " + journal.string() + " aside: " + error.message()};
+  return Status{};
+}
+
+// --load-map FILE with --map-id ID (neither without the other).
+Status startMapIfAsked(const CommandLine& cli, const PinholeCamera& camera, SlamMode mode,
+                       std::optional<LoadedMap>* start_map, int64_t* map_id) {
+  if (cli.has("load-map") != cli.has("map-id")) {
+    return Error{"--load-map FILE and --map-id ID go together: the map in FILE is served as map ID"};
+  }
+  if (!cli.has("load-map")) return Status{};
+  auto id = cli.getInt("map-id", 1, int64_t{1} << 62);
+  if (!id) return Error{id.error()};
+  auto loaded = loadStartMap(cli.get("load-map"), camera, mode);
+  if (!loaded) return Error{loaded.error()};
+  std::cerr << "rgbd-mapper: starting from " << cli.get("load-map") << " (" << loaded->keyframes.size()
+            << " keyframes, " << loaded->points.size() << " points) as map " << *id << "\n";
+  *map_id = static_cast<int64_t>(*id);
+  start_map->emplace(std::move(*loaded));
   return Status{};
 }
 
@@ -50,6 +73,11 @@ int main(int argc, char** argv) {
   if (!cli.has("camera")) return usageError("rgbd-mapper", "--camera is required (see --help)");
   auto camera = loadCamera(cli.get("camera"));
   if (!camera) return usageError("rgbd-mapper", camera.error());
+  std::optional<LoadedMap> start_map;
+  int64_t map_id = 0;
+  if (Status s = startMapIfAsked(cli, *camera, *parseSlamMode(config->slam->mode), &start_map, &map_id); !s) {
+    return usageError("rgbd-mapper", s.error());
+  }
   const MapperNodeOptions options{config->procs->channels, config->procs->mapper_node, config->slam->sync.mapper,
                                   cli.get("state-dir") == "none" ? "" : cli.get("state-dir")};
   if (cli.has("fresh") && !options.state_dir.empty()) {
@@ -62,7 +90,7 @@ int main(int argc, char** argv) {
             << cli.get("lcm-url") << "\nconfiguration:\n" << config->registry->describe();
 
   MapperNode node(lcm->get(), *camera, config->slam->mapper, *parseSlamMode(config->slam->mode), options);
-  if (Status restored = node.restore(); !restored) return usageError("rgbd-mapper", restored.error());
+  if (Status restored = node.restore(start_map ? &*start_map : nullptr, map_id); !restored) return usageError("rgbd-mapper", restored.error());
   node.run(installStopHandlers());
   node.printSummary();
   return 0;

@@ -38,7 +38,7 @@ MapperNode::~MapperNode() {
   }
 }
 
-Status MapperNode::restore() {
+Status MapperNode::restore(const LoadedMap* start_map, int64_t map_id) {
   MapJournal::Contents contents;
   if (!options_.state_dir.empty()) {
     auto journal = MapJournal::open(options_.state_dir, &contents);
@@ -47,6 +47,10 @@ Status MapperNode::restore() {
     if (!contents.warning.empty()) std::cerr << "rgbd-mapper: warning: " << contents.warning << "\n";
   }
   sync_ = std::make_unique<MapperSync>(&mapper_, options_.sync, journal_ ? &*journal_ : nullptr);
+  if (start_map) {
+    mapper_.load(*start_map);
+    sync_->adopt(map_id, start_map->nextKeyframeId());
+  }
   std::vector<IncomingKeyframe> journaled;
   for (auto& bytes : contents.keyframes) {
     auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());
@@ -56,7 +60,11 @@ Status MapperNode::restore() {
   }
   // No refinement here: the restored map is published at once (a snapshot), and the worker
   // refines it afterwards like any other (a tracker waits for it meanwhile).
-  if (Status s = sync_->restore(journaled, contents.last_version); !s) return Error{journal_->path() + ": " + s.error()};
+  if (Status s = sync_->restore(journaled, contents.last_version); !s) {
+    const bool continues_a_file = !start_map && !journaled.empty() && journaled.front().keyframe.id > 0;
+    return Error{journal_->path() + ": " + s.error() +
+                 (continues_a_file ? " (if this map started from a file: restart with the same --load-map and --map-id)" : "")};
+  }
   if (!journaled.empty()) {
     std::cerr << "rgbd-mapper: restored map " << sync_->mapId() << " from " << journal_->path() << ": "
               << journaled.size() << " keyframes, " << mapper_.map().numPoints()

@@ -18,6 +18,7 @@
 #include "common/map_journal.h"
 #include "common/process_options.h"
 #include "common/samples.h"
+#include "rgbdslam/map/map_file.h"
 #include "rgbdslam/mapping/mapper.h"
 #include "rgbdslam/sync/mapper_sync.h"
 
@@ -35,8 +36,11 @@ class MapperNode {
   MapperNode(lcm::LCM* lcm, const PinholeCamera& camera, const MapperOptions& mapper_options,
              SlamMode mode, MapperNodeOptions options);
   ~MapperNode();
-  // Opens the journal and re-integrates what it holds; an error if it cannot be opened.
-  Status restore();
+  // Before run(): starts from a map file's content as map 'map_id' (rgbd-mapper --load-map;
+  // the tracker loads the same file with the same id), then opens the journal and
+  // re-integrates what it holds (after a restart: the keyframes added to the loaded map);
+  // an error if it cannot be opened or holds keyframes of another map.
+  Status restore(const LoadedMap* start_map = nullptr, int64_t map_id = 0);
   // Subscribes, runs the worker, and returns when 'stop' becomes true.
   void run(const std::atomic<bool>& stop);
   void printSummary() const;

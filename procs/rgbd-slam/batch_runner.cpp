@@ -9,6 +9,7 @@
 #include <limits>
 #include <iostream>
 
+#include "common/map_start.h"
 #include "common/process.h"
 #include "common/source_factory.h"
 #include "rgbdslam/camera/calibration_io.h"
@@ -28,18 +29,13 @@ double msSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-// The map to start from, checked against this run's camera and mode; none without --load-map.
-Expected<std::optional<LoadedMap>> loadStartMap(const BatchOptions& options, const PinholeCamera& camera,
-                                                double* load_ms) {
+// The map to start from; none without --load-map.
+Expected<std::optional<LoadedMap>> startMapIfAsked(const BatchOptions& options, const PinholeCamera& camera,
+                                                   double* load_ms) {
   if (options.load_map.empty()) return std::optional<LoadedMap>();
   const auto start = std::chrono::steady_clock::now();
-  auto loaded = loadMap(options.load_map, camera);
-  if (!loaded) return Error{"--load-map: " + loaded.error()};
-  const SlamMode mode = *parseSlamMode(options.config.slam->mode);
-  if (loaded->mode != mode) {
-    return Error{"--load-map: " + options.load_map + " was made in mode " + slamModeName(loaded->mode) +
-                 "; this run's mode is " + slamModeName(mode) + " (--mode)"};
-  }
+  auto loaded = loadStartMap(options.load_map, camera, *parseSlamMode(options.config.slam->mode));
+  if (!loaded) return Error{loaded.error()};
   *load_ms = msSince(start);
   return std::optional<LoadedMap>(std::move(*loaded));
 }
@@ -123,7 +119,7 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
     frame_log << "seq,t_s,status,state,points,quality,sigma_m,sigma_deg,correction_m,depth_aided,inconsistent,keyframe,track_ms,reason\n";
   }
   double load_ms = 0.0;
-  auto start_map = loadStartMap(options, camera, &load_ms);
+  auto start_map = startMapIfAsked(options, camera, &load_ms);
   if (!start_map) return Error{start_map.error()};
   const LoadedMap* loaded = *start_map ? &**start_map : nullptr;
   auto runner = std::unique_ptr<BatchRunner>(

@@ -2,9 +2,11 @@
 // publishes SLAM_POSE, sends keyframes to the mapper (SLAM_KEYFRAME, re-sent until
 // acknowledged) and applies its map versions (SLAM_MAP). See --help.
 #include <iostream>
+#include <optional>
 #include <random>
 
 #include "common/cli.h"
+#include "common/map_start.h"
 #include "common/process.h"
 #include "common/slam_config.h"
 #include "rgbd-tracker/tracker_node.h"
@@ -21,7 +23,10 @@ CommandLine makeCommandLine() {
   cli.option("link-url", "URL", "LCM URL of the link to the mapper (keyframes, maps, status)", "the --lcm-url");
   // Channels, periods and the keyframe encoding are configuration (sections channels,
   // tracker_node, sync): --config FILE or --set, e.g. --set tracker_node.exit_after_idle_s=2.
-  cli.option("map-id", "ID", "this session's map id (> 0)", "random");
+  cli.option("map-id", "ID", "this session's map id (> 0); with --load-map the id the mapper serves the file as", "random");
+  cli.option("load-map", "FILE", "start from the map in FILE (made with this camera and mode; rgbd-mapper --load-map the same file); "
+             "the first frames relocalise in it");
+  cli.flag("localise-only", "with --load-map: track in the loaded map, add no keyframes");
   addLcmUrlOption(cli);
   return cli;
 }
@@ -35,6 +40,23 @@ Expected<int64_t> mapId(const CommandLine& cli) {
   auto id = cli.getInt("map-id", 1, int64_t{1} << 62);
   if (!id) return Error{id.error()};
   return static_cast<int64_t>(*id);
+}
+
+// --load-map FILE (with --map-id, so that tracker and mapper name the loaded map alike) and
+// --localise-only (only with --load-map).
+Status startMapIfAsked(const CommandLine& cli, const PinholeCamera& camera, SlamMode mode,
+                       std::optional<LoadedMap>* start_map) {
+  if (!cli.has("load-map")) {
+    if (cli.has("localise-only")) return Error{"--localise-only needs --load-map FILE (the map to localise in)"};
+    return Status{};
+  }
+  if (!cli.has("map-id")) return Error{"--load-map needs --map-id ID, the id rgbd-mapper --load-map serves the map as"};
+  auto loaded = loadStartMap(cli.get("load-map"), camera, mode);
+  if (!loaded) return Error{loaded.error()};
+  std::cerr << "rgbd-tracker: starting from " << cli.get("load-map") << " (" << loaded->keyframes.size() << " keyframes, "
+            << loaded->points.size() << " points)" << (cli.has("localise-only") ? ", localising only" : "") << "\n";
+  start_map->emplace(std::move(*loaded));
+  return Status{};
 }
 
 }  // namespace
@@ -54,6 +76,10 @@ int main(int argc, char** argv) {
   if (!camera) return usageError("rgbd-tracker", camera.error());
   auto map_id = mapId(cli);
   if (!map_id) return usageError("rgbd-tracker", map_id.error());
+  std::optional<LoadedMap> start_map;
+  if (Status s = startMapIfAsked(cli, *camera, *parseSlamMode(config->slam->mode), &start_map); !s) {
+    return usageError("rgbd-tracker", s.error());
+  }
   auto local = openLcm(cli.get("lcm-url"));
   if (!local) return usageError("rgbd-tracker", local.error());
   std::unique_ptr<lcm::LCM> own_link;
@@ -70,6 +96,7 @@ int main(int argc, char** argv) {
   TrackerNode node(local->get(), link, *camera, config->slam->tracker, *parseSlamMode(config->slam->mode),
                    *map_id,
                    TrackerNodeOptions{config->procs->channels, config->procs->tracker_node, config->slam->sync});
+  if (start_map) node.startFrom(*start_map, cli.has("localise-only"));
   const int status = node.run(installStopHandlers());
   node.printSummary();
   return status;

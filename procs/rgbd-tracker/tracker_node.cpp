@@ -48,6 +48,11 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
       sync_(map_id, options_.sync.outbox) {}
 
+void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
+  tracker_.load(map, !localise_only);
+  sync_.startAfter(map.nextKeyframeId());
+}
+
 int TrackerNode::run(const std::atomic<bool>& stop) {
   auto frames = subscribeRaw(local_, options_.channels.frame, this, &TrackerNode::onFrame);
   auto maps = subscribeRaw(link_, options_.channels.map, this, &TrackerNode::onMap);

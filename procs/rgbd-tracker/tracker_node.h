@@ -28,6 +28,7 @@
 #include "common/loss_report.h"
 #include "common/process_options.h"
 #include "common/samples.h"
+#include "rgbdslam/map/map_file.h"
 #include "rgbdslam/sync/sync_options.h"
 #include "rgbdslam/sync/tracker_sync.h"
 #include "rgbdslam/tracking/tracker.h"
@@ -46,6 +47,10 @@ class TrackerNode {
   TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& camera,
               const TrackerOptions& tracker_options, SlamMode mode, int64_t map_id,
               TrackerNodeOptions options);
+  // Before run(): start from a map file's content (rgbd-tracker --load-map), as the mapper
+  // does with the same file and map id: keyframe ids continue after the file's. With
+  // 'localise_only' the tracker adds no keyframes (tracker.h, load).
+  void startFrom(const LoadedMap& map, bool localise_only);
   // Runs until 'stop', or (exit_after_idle_s) until frames stopped and every keyframe is
   // acknowledged or ack_wait_s passed. Returns the exit status: 0, or 1 when keyframes
   // were left unacknowledged.

@@ -12,6 +12,7 @@
 # The tracker publishes keyframes and status on the onboard bus; the relays carry
 # SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS to the link and SLAM_MAP|MAPPER_STATUS back, each after the delay.
 SPLIT_MAP_ID=77  # fixed, so the tests can address the map
+SPLIT_TRACKER_ARGS=()  # more rgbd-tracker arguments for the next split_start
 
 split_value() { awk -v k="$1" '$1 == k {print $2}' "$2"; }
 
@@ -29,7 +30,7 @@ split_start() {
   bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"
   bg_onboard SPLIT_TRACKER "$PROCS/rgbd-tracker" --camera "$SRC/config/cameras/synthetic.yaml" \
       --map-id "$SPLIT_MAP_ID" --set tracker_node.exit_after_idle_s=2,tracker_node.ack_wait_s=20 --lcm-url "$LOCAL_URL" \
-      > "$dir/tracker.out" 2> "$dir/tracker.err"
+      ${SPLIT_TRACKER_ARGS[@]+"${SPLIT_TRACKER_ARGS[@]}"} > "$dir/tracker.out" 2> "$dir/tracker.err"
   sleep 1
 }
 
