@@ -1,5 +1,6 @@
 #include "rgbd-mapper/mapper_node.h"
 
+#include <cstdio>
 #include <iostream>
 
 #include "common/lcm_conversions.h"
@@ -234,6 +235,9 @@ void MapperNode::printSummary() const {
               << " times) and " << c.keyframes_skipped << " keyframes the tracker no longer held (skipped)";
   }
   std::cerr << "\n";
+  const LoopClosureCounters& loops = mapper_.loopClosures();  // the worker has stopped
+  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
+              loops.recognised, loops.closed, loops.refused);
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries
   std::fflush(stdout);
 }

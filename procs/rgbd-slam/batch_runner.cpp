@@ -265,6 +265,9 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
   std::printf("map_correction_max_m %.4f\n", max_correction_m_);
+  const LoopClosureCounters& loops = slam_->mapper().loopClosures();  // the mapper has finished
+  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
+              loops.recognised, loops.closed, loops.refused);
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printMapFileSummary();
   printPeakRss();

@@ -14,6 +14,7 @@
 #include "rgbdslam/mapping/data_association.h"
 #include "rgbdslam/mapping/epipolar_search.h"
 #include "rgbdslam/image/patch.h"
+#include "rgbdslam/mapping/loop_closer.h"
 #include "rgbdslam/mapping/map_maintenance.h"
 
 namespace rgbdslam {
@@ -60,15 +61,23 @@ void updateMedianDepth(const Map& map, Keyframe* kf) {
 class Mapper::Impl {
  public:
   Impl(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode)
-      : camera_(camera), options_(options), mode_(mode), adjuster_(baOptions(options, mode)) {}
+      : camera_(camera), options_(options), mode_(mode), adjuster_(baOptions(options, mode)),
+        loop_closer_(camera, loopOptions(options, mode)) {}
 
   MapperResult addKeyframe(const KeyframeData& data, const std::atomic<bool>* interrupt);
   void load(const LoadedMap& loaded);
   bool refine(const std::atomic<bool>* interrupt);
   MapChanges takeChanges() { return std::exchange(changes_, MapChanges{}); }
   const Map& map() const { return map_; }
+  const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
 
  private:
+  // Mono's scale drifts: an SE(3) pose graph cannot take that out (loop_closer.h).
+  static LoopClosureOptions loopOptions(const MapperOptions& options, SlamMode mode) {
+    LoopClosureOptions loop = options.loop_closure;
+    loop.enabled = loop.enabled && mode != SlamMode::kMono;
+    return loop;
+  }
   static BaOptions baOptions(const MapperOptions& options, SlamMode mode) {
     BaOptions ba = options.ba;
     ba.use_depth = ba.use_depth && mode == SlamMode::kDepthBa;
@@ -92,6 +101,7 @@ class Mapper::Impl {
   MapperOptions options_;
   SlamMode mode_;
   BundleAdjuster adjuster_;
+  LoopCloser loop_closer_;
   Map map_;
   std::deque<PointId> refind_queue_;  // new points not yet searched in the other keyframes
   std::set<std::pair<PointId, KeyframeId>> pending_outliers_;  // 2-D outliers to remove
@@ -128,6 +138,8 @@ MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atom
   result.local_ba_ms = msSince(ba_start);
   updateMedianDepth(map_, map_.keyframe(data.id));
   changes_.keyframes.insert(data.id);
+  result.loop = loop_closer_.onKeyframe(&map_, data.id, &changes_);
+  if (result.loop.closed) global_ba_needed_ = true;
   global_ba_needed_ = global_ba_needed_ || ++keyframes_since_global_ba_ >= options_.ba_windows.global_ba_every;
   cull_needed_ = true;
   result.status = MapperResult::Status::kIntegrated;
@@ -141,6 +153,8 @@ void Mapper::Impl::load(const LoadedMap& loaded) {
     map_.addKeyframe(loaded.buildKeyframe(i, options_.keyframe_build));
   }
   for (const MapPointData& p : loaded.points) map_.addPoint(MapPoint(p));
+  MapChanges none;  // places only: nothing is closed or moved
+  for (const KeyframeData& kf : loaded.keyframes) loop_closer_.onKeyframe(&map_, kf.id, &none, /*close=*/false);
 }
 
 void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
@@ -348,5 +362,6 @@ void Mapper::load(const LoadedMap& loaded) { impl_->load(loaded); }
 bool Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(interrupt); }
 MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
+const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
 
 }  // namespace rgbdslam

@@ -31,6 +31,7 @@ void MapperOptions::bind(OptionRegistry* r, const std::string& s) {
   cull.bind(r, s);
   keyframe_build.bind(r, s);
   ba.bind(r);
+  loop_closure.bind(r);
   // Ranges that only make sense together (a minimum above its maximum leaves nothing).
   r->requireBelow(s, "keyframe_min_depth_m", "keyframe_max_depth_m");
   r->requireBelow(s, "epipolar_min_depth_m", "epipolar_max_depth_m");

@@ -19,6 +19,9 @@
 //   load(map): before the first keyframe, start from a map file's content (map_file.h): its
 //   keyframes (images rebuilt), points and measurements as saved; nothing is re-optimised
 //   and nothing counts as a change. Keyframes added later continue after its ids.
+//   Loop closure (loop_closer.h): after its local BA a new keyframe's place is looked up
+//   among the old keyframes; a verified loop moves every keyframe and point (a pose graph)
+//   and triggers global bundle adjustment.
 //   takeChanges(): the ids of keyframes and points changed or removed since the last call.
 //   The mapper versions nothing: the map publisher (sync/map_publisher.h) does.
 // Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
@@ -43,6 +46,7 @@
 #include "rgbdslam/mapping/bundle_adjuster.h"
 #include "rgbdslam/mapping/data_association.h"
 #include "rgbdslam/mapping/epipolar_search.h"
+#include "rgbdslam/mapping/loop_closer.h"
 #include "rgbdslam/mapping/map_maintenance.h"
 #include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/util/option_registry.h"
@@ -90,6 +94,7 @@ struct MapperOptions {
   CullOptions cull;             // map clean-up (map_maintenance.h)
   BaOptions ba;                 // use_depth only in mode depth-ba
   KeyframeBuildOptions keyframe_build;
+  LoopClosureOptions loop_closure;  // sections loop_closure, place_recognition, pose_graph
 
   void bind(OptionRegistry* registry, const std::string& section = "mapper");
 };
@@ -105,6 +110,7 @@ struct MapperResult {
   int dropped_measurements = 0;  // measurements of points the map does not know
   int epipolar_points = 0;       // points added by epipolar search
   double integrate_ms = 0.0, local_ba_ms = 0.0;
+  LoopClosureResult loop;        // the loop closer's verdict on this keyframe
 };
 
 const char* toString(MapperResult::Status status);
@@ -118,6 +124,7 @@ class Mapper {
   bool refine(const std::atomic<bool>* interrupt = nullptr);
   MapChanges takeChanges();
   const Map& map() const;
+  const LoopClosureCounters& loopClosures() const;
 
  private:
   class Impl;

@@ -1,8 +1,8 @@
 #pragma once
 // Place recognition over all keyframes, verified with depth (issue 11, item 1): the ground
 // mapper's way to notice that the camera is back at a place it mapped long ago (a loop to
-// close), or where a lost camera is (relocalisation from anywhere). Not yet called by the
-// mapper or a loop closer: a library component with its tests and benchmark.
+// close), or where a lost camera is (relocalisation from anywhere). Called by the loop
+// closer (loop_closer.h) on every new keyframe.
 //
 // Call order: PlaceDatabase db(camera, options); db.add(id, T_w_k, features) for every
 // keyframe, ids increasing (features: extractFeatures3d of the keyframe, as the tracker keeps

@@ -1,6 +1,6 @@
 #pragma once
-// Pose-graph optimisation over keyframes (issue 11, item 2; a library component, not yet
-// called by the mapper). Closes loops: the keyframe poses T_w_k are moved so that the
+// Pose-graph optimisation over keyframes (issue 11, item 2; the loop closer's,
+// loop_closer.h). Closes loops: the keyframe poses T_w_k are moved so that the
 // relative-pose edges (odometry between consecutive keyframes, covisible pairs) and the loop
 // edges (place recognition's T_k_q) agree as well as their uncertainties allow.
 //

@@ -1,0 +1,194 @@
+#include "rgbdslam/mapping/loop_closer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <set>
+
+namespace rgbdslam {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+constexpr double kDegPerRad = 180.0 / M_PI;
+
+double angleDeg(const SE3& T) { return T.log().tail<3>().norm() * kDegPerRad; }
+
+// The keyframes that measure a point 'id' measures: tied to it by bundle adjustment already.
+std::vector<KeyframeId> sharingPoints(const Map& map, const Keyframe& kf) {
+  std::set<KeyframeId> sharing;
+  for (const auto& [pid, m] : kf.measurements()) {
+    for (KeyframeId other : map.observers(pid)) sharing.insert(other);
+  }
+  sharing.erase(kf.id);
+  return {sharing.begin(), sharing.end()};
+}
+
+}  // namespace
+
+void LoopClosureOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "enabled", &enabled, "close loops in the mapper (depth modes; never in mono)");
+  r->bind(s, "min_keyframe_gap", &min_keyframe_gap, 1, 1000000, "keyframes",
+          "a loop candidate is at least this many keyframes older than the new one");
+  r->bind(s, "odometry_sigma_min_m", &odometry_sigma_min_m, 1e-6, 10.0, "m",
+          "1-sigma drift between consecutive keyframes in the pose graph, at least...");
+  r->bind(s, "odometry_sigma_fraction", &odometry_sigma_fraction, 0.0, 10.0, "",
+          "...or this fraction of their distance");
+  r->bind(s, "odometry_sigma_min_deg", &odometry_sigma_min_deg, 1e-6, 180.0, "deg",
+          "1-sigma rotation drift between consecutive keyframes, at least...");
+  r->bind(s, "odometry_sigma_deg_per_m", &odometry_sigma_deg_per_m, 0.0, 180.0, "deg/m",
+          "...or this much per metre between them");
+  r->bind(s, "loop_sigma_min_m", &loop_sigma_min_m, 1e-6, 10.0, "m", "a loop edge's 1-sigma translation, at least");
+  r->bind(s, "loop_sigma_min_deg", &loop_sigma_min_deg, 1e-6, 180.0, "deg", "...and rotation");
+  r->bind(s, "min_correction_m", &min_correction_m, 0.0, 100.0, "m",
+          "a closure that moves no keyframe further than this...");
+  r->bind(s, "min_correction_deg", &min_correction_deg, 0.0, 180.0, "deg", "...nor turns one further changes nothing");
+  r->bind(s, "features", &features, 10, 10000, "features", "ORB features per keyframe for place recognition, at most");
+  place.bind(r, "place_recognition");
+  graph.bind(r, "pose_graph");
+}
+
+LoopCloser::LoopCloser(const PinholeCamera& camera, const LoopClosureOptions& options)
+    : camera_(camera), options_(options) {}
+
+LoopCloser::~LoopCloser() = default;
+
+LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* changes, bool close) {
+  LoopClosureResult result;
+  const Keyframe* kf = map->keyframe(id);
+  if (!options_.enabled || !kf || kf->cold() || kf->depth.empty()) return result;
+  const auto start = Clock::now();
+  FeatureRelocaliserOptions extract;
+  extract.features = options_.features;
+  Features3d features = extractFeatures3d(kf->grey(), kf->depth, camera_, extract);
+  const bool due = close && static_cast<int>(map->numKeyframes()) > options_.min_keyframe_gap;
+  if (!places_ && !due) {
+    pending_.push_back(Pending{id, kf->T_w_c, std::move(features)});
+    return result;
+  }
+  if (!places_) {
+    places_ = std::make_unique<PlaceDatabase>(camera_, options_.place);
+    for (Pending& p : pending_) places_->add(p.id, p.T_w_k, std::move(p.features));
+    pending_.clear();
+  }
+  // Bundle adjustment and earlier closures moved the keyframes since they were added.
+  for (const auto& [kid, other] : map->keyframes()) places_->setPose(kid, other->T_w_c);
+  if (due) {
+    PlaceExclusion exclusion;
+    exclusion.newest = id - options_.min_keyframe_gap;
+    exclusion.ids = sharingPoints(*map, *kf);
+    const PlaceMatch match = places_->recognise(features, exclusion, kf->T_w_c);
+    result.tried = true;
+    result.place = match.status;
+    ++counters_.queries;
+    if (match.recognised()) {
+      ++counters_.recognised;
+      result.with = match.best.keyframe;
+    }
+    result.recognise_ms = msSince(start);
+    if (match.recognised()) {
+      PoseGraphEdge loop;
+      loop.from = match.best.keyframe;
+      loop.to = id;
+      loop.T_a_b = match.best.T_k_q;
+      loop.sigma_t = Vec3::Constant(std::max(match.best.sigma.translation_m, options_.loop_sigma_min_m));
+      loop.sigma_r = Vec3::Constant(std::max(match.best.sigma.rotation_deg, options_.loop_sigma_min_deg) / kDegPerRad);
+      loop.kind = PoseGraphEdgeKind::kLoop;
+      const auto graph_start = Clock::now();
+      PoseGraph graph = buildGraph(*map, loop);
+      PoseGraphResult solved = optimisePoseGraph(graph, options_.graph);
+      // Loop edges that disagree with the solution are dropped, and the graph solved again.
+      if (solved.ok() && solved.loop_edges_disagreeing > 0) {
+        PoseGraph kept;
+        kept.nodes = graph.nodes;
+        for (size_t i = 0; i < graph.edges.size(); ++i) {
+          if (!solved.edges[i].disagrees || graph.edges[i].kind != PoseGraphEdgeKind::kLoop) kept.edges.push_back(graph.edges[i]);
+        }
+        const bool new_edge_kept = !solved.edges.back().disagrees;
+        graph = std::move(kept);
+        solved = new_edge_kept ? optimisePoseGraph(graph, options_.graph) : PoseGraphResult{};
+        result.refused = !new_edge_kept;
+      }
+      result.graph_ms = msSince(graph_start);
+      if (result.refused || !solved.ok()) {
+        ++counters_.refused;
+        result.refused = true;
+      } else {
+        loops_.clear();
+        for (const PoseGraphEdge& e : graph.edges) {
+          if (e.kind == PoseGraphEdgeKind::kLoop) loops_.push_back(e);
+        }
+        if (apply(map, solved, graph, changes, &result)) ++counters_.closed;
+      }
+    }
+  }
+  places_->add(id, map->keyframe(id)->T_w_c, std::move(features));
+  return result;
+}
+
+// Odometry edges between consecutive keyframes at their current relative poses, with sigmas
+// for the drift a step may carry; the loop edges accepted before, and 'loop' last.
+PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) const {
+  PoseGraph graph;
+  const Keyframe* previous = nullptr;
+  for (const auto& [id, kf] : map.keyframes()) {
+    graph.nodes.push_back(PoseGraphNode{id, kf->T_w_c, previous == nullptr});
+    if (previous) {
+      PoseGraphEdge edge;
+      edge.from = previous->id;
+      edge.to = id;
+      edge.T_a_b = previous->T_w_c.inverse() * kf->T_w_c;
+      const double step_m = edge.T_a_b.translation().norm();
+      edge.sigma_t = Vec3::Constant(std::max(options_.odometry_sigma_min_m, options_.odometry_sigma_fraction * step_m));
+      edge.sigma_r = Vec3::Constant(
+          std::max(options_.odometry_sigma_min_deg, options_.odometry_sigma_deg_per_m * step_m) / kDegPerRad);
+      edge.kind = PoseGraphEdgeKind::kOdometry;
+      graph.edges.push_back(edge);
+    }
+    previous = kf.get();
+  }
+  for (const PoseGraphEdge& e : loops_) {
+    if (map.hasKeyframe(e.from) && map.hasKeyframe(e.to)) graph.edges.push_back(e);
+  }
+  graph.edges.push_back(loop);
+  return graph;
+}
+
+// The solution into the map, if it moves some keyframe by more than min_correction_*: every
+// keyframe to its new pose, every point with its source keyframe.
+bool LoopCloser::apply(Map* map, const PoseGraphResult& solved, const PoseGraph& graph, MapChanges* changes,
+                       LoopClosureResult* result) const {
+  std::vector<SE3> moves;  // T_w_k' T_w_k^-1 per node
+  moves.reserve(graph.nodes.size());
+  for (size_t i = 0; i < graph.nodes.size(); ++i) {
+    const SE3 move = solved.poses[i].T_w_c * graph.nodes[i].T_w_k.inverse();
+    moves.push_back(move);
+    result->correction_m = std::max(result->correction_m, (solved.poses[i].T_w_c.translation() - graph.nodes[i].T_w_k.translation()).norm());
+    result->correction_deg = std::max(result->correction_deg, angleDeg(move));
+  }
+  if (result->correction_m <= options_.min_correction_m && result->correction_deg <= options_.min_correction_deg) {
+    return false;
+  }
+  std::map<KeyframeId, const SE3*> move_of;
+  for (size_t i = 0; i < graph.nodes.size(); ++i) {
+    Keyframe* kf = map->keyframe(graph.nodes[i].id);
+    kf->T_w_c = solved.poses[i].T_w_c;
+    changes->keyframes.insert(kf->id);
+    move_of[kf->id] = &moves[i];
+  }
+  for (const auto& [pid, point] : map->points()) {
+    const auto move = move_of.find(point.source_keyframe);
+    if (move == move_of.end()) continue;
+    MapPoint* p = map->point(pid);
+    p->p_w = *move->second * p->p_w;
+    changes->points.insert(pid);
+  }
+  result->closed = true;
+  return true;
+}
+
+}  // namespace rgbdslam
