@@ -33,14 +33,14 @@ std::unique_ptr<Keyframe> loopKeyframe(KeyframeId id, int frame, const SE3& T_w_
 
 // Odometry that drifts: a growing offset and yaw about the first camera, reaching
 // kLoopDriftM and kLoopDriftDeg at the last keyframe.
-SE3 drifted(const SE3& truth, double fraction) {
+SE3 loopDrifted(const SE3& truth, double fraction) {
   const double yaw = fraction * kLoopDriftDeg * M_PI / 180.0;
   const SE3 drift(Mat3(Eigen::AngleAxisd(yaw, Vec3::UnitY()).toRotationMatrix()),
                   Vec3(fraction * kLoopDriftM, 0.0, 0.5 * fraction * kLoopDriftM));
   return drift * truth;
 }
 
-double errorM(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
+double loopErrorM(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
 
 TEST(LoopCloser, ClosesALoopAndTakesOutTheDrift) {
   const int keyframes = kLoopLastFrame / kLoopFrameStep + 1;
@@ -53,14 +53,14 @@ TEST(LoopCloser, ClosesALoopAndTakesOutTheDrift) {
   for (int k = 0; k < keyframes; ++k) {
     const int frame = k * kLoopFrameStep;
     truth.push_back(loopRoom().groundTruthPose(static_cast<size_t>(frame)));
-    Keyframe* kf = map.addKeyframe(loopKeyframe(k, frame, drifted(truth.back(), static_cast<double>(k) / (keyframes - 1))));
+    Keyframe* kf = map.addKeyframe(loopKeyframe(k, frame, loopDrifted(truth.back(), static_cast<double>(k) / (keyframes - 1))));
     // One point per keyframe, 2 m in front of it: it must move with its keyframe.
     MapPoint point;
     point.id = k;
     point.source_keyframe = k;
     point.p_w = kf->T_w_c * Vec3(0.0, 0.0, 2.0);
     map.addPoint(point);
-    drift_before = std::max(drift_before, errorM(kf->T_w_c, truth.back()));
+    drift_before = std::max(drift_before, loopErrorM(kf->T_w_c, truth.back()));
     const LoopClosureResult result = closer.onKeyframe(&map, k, &changes);
     ASSERT_FALSE(result.refused) << "keyframe " << k << " with " << result.with;
     if (result.closed && !closing.closed) closing = result;
@@ -70,7 +70,7 @@ TEST(LoopCloser, ClosesALoopAndTakesOutTheDrift) {
   EXPECT_GT(closing.correction_m, 0.02);
   // After the closure the keyframes near the loop's end are within a third of the drift.
   double drift_after = 0.0;
-  for (int k = keyframes - 3; k < keyframes; ++k) drift_after = std::max(drift_after, errorM(map.keyframe(k)->T_w_c, truth[k]));
+  for (int k = keyframes - 3; k < keyframes; ++k) drift_after = std::max(drift_after, loopErrorM(map.keyframe(k)->T_w_c, truth[k]));
   EXPECT_LT(drift_after, drift_before / 3) << "drift " << drift_before << " m before, " << drift_after << " m after";
   std::printf("loop %ld -> %ld closed: drift at the end %.3f m before, %.3f m after; largest correction %.3f m %.2f deg\n",
               static_cast<long>(closing.with), static_cast<long>(keyframes - 1), drift_before, drift_after,

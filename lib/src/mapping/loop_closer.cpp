@@ -8,18 +8,18 @@
 namespace rgbdslam {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using LoopClock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+double loopMsSince(LoopClock::time_point start) {
+  return std::chrono::duration<double, std::milli>(LoopClock::now() - start).count();
 }
 
-constexpr double kDegPerRad = 180.0 / M_PI;
+constexpr double kLoopDegPerRad = 180.0 / M_PI;
 
-double angleDeg(const SE3& T) { return T.log().tail<3>().norm() * kDegPerRad; }
+double loopAngleDeg(const SE3& T) { return T.log().tail<3>().norm() * kLoopDegPerRad; }
 
-// The keyframes that measure a point 'id' measures: tied to it by bundle adjustment already.
-std::vector<KeyframeId> sharingPoints(const Map& map, const Keyframe& kf) {
+// The keyframes that measure a point that 'kf' measures: tied to it by bundle adjustment already.
+std::vector<KeyframeId> keyframesSharingPoints(const Map& map, const Keyframe& kf) {
   std::set<KeyframeId> sharing;
   for (const auto& [pid, m] : kf.measurements()) {
     for (KeyframeId other : map.observers(pid)) sharing.insert(other);
@@ -61,7 +61,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
   LoopClosureResult result;
   const Keyframe* kf = map->keyframe(id);
   if (!options_.enabled || !kf || kf->cold() || kf->depth.empty()) return result;
-  const auto start = Clock::now();
+  const auto start = LoopClock::now();
   FeatureRelocaliserOptions extract;
   extract.features = options_.features;
   Features3d features = extractFeatures3d(kf->grey(), kf->depth, camera_, extract);
@@ -80,7 +80,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
   if (due) {
     PlaceExclusion exclusion;
     exclusion.newest = id - options_.min_keyframe_gap;
-    exclusion.ids = sharingPoints(*map, *kf);
+    exclusion.ids = keyframesSharingPoints(*map, *kf);
     const PlaceMatch match = places_->recognise(features, exclusion, kf->T_w_c);
     result.tried = true;
     result.place = match.status;
@@ -89,16 +89,16 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
       ++counters_.recognised;
       result.with = match.best.keyframe;
     }
-    result.recognise_ms = msSince(start);
+    result.recognise_ms = loopMsSince(start);
     if (match.recognised()) {
       PoseGraphEdge loop;
       loop.from = match.best.keyframe;
       loop.to = id;
       loop.T_a_b = match.best.T_k_q;
       loop.sigma_t = Vec3::Constant(std::max(match.best.sigma.translation_m, options_.loop_sigma_min_m));
-      loop.sigma_r = Vec3::Constant(std::max(match.best.sigma.rotation_deg, options_.loop_sigma_min_deg) / kDegPerRad);
+      loop.sigma_r = Vec3::Constant(std::max(match.best.sigma.rotation_deg, options_.loop_sigma_min_deg) / kLoopDegPerRad);
       loop.kind = PoseGraphEdgeKind::kLoop;
-      const auto graph_start = Clock::now();
+      const auto graph_start = LoopClock::now();
       PoseGraph graph = buildGraph(*map, loop);
       PoseGraphResult solved = optimisePoseGraph(graph, options_.graph);
       // Loop edges that disagree with the solution are dropped, and the graph solved again.
@@ -113,7 +113,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
         solved = new_edge_kept ? optimisePoseGraph(graph, options_.graph) : PoseGraphResult{};
         result.refused = !new_edge_kept;
       }
-      result.graph_ms = msSince(graph_start);
+      result.graph_ms = loopMsSince(graph_start);
       if (result.refused || !solved.ok()) {
         ++counters_.refused;
         result.refused = true;
@@ -145,7 +145,7 @@ PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) cons
       const double step_m = edge.T_a_b.translation().norm();
       edge.sigma_t = Vec3::Constant(std::max(options_.odometry_sigma_min_m, options_.odometry_sigma_fraction * step_m));
       edge.sigma_r = Vec3::Constant(
-          std::max(options_.odometry_sigma_min_deg, options_.odometry_sigma_deg_per_m * step_m) / kDegPerRad);
+          std::max(options_.odometry_sigma_min_deg, options_.odometry_sigma_deg_per_m * step_m) / kLoopDegPerRad);
       edge.kind = PoseGraphEdgeKind::kOdometry;
       graph.edges.push_back(edge);
     }
@@ -168,7 +168,7 @@ bool LoopCloser::apply(Map* map, const PoseGraphResult& solved, const PoseGraph&
     const SE3 move = solved.poses[i].T_w_c * graph.nodes[i].T_w_k.inverse();
     moves.push_back(move);
     result->correction_m = std::max(result->correction_m, (solved.poses[i].T_w_c.translation() - graph.nodes[i].T_w_k.translation()).norm());
-    result->correction_deg = std::max(result->correction_deg, angleDeg(move));
+    result->correction_deg = std::max(result->correction_deg, loopAngleDeg(move));
   }
   if (result->correction_m <= options_.min_correction_m && result->correction_deg <= options_.min_correction_deg) {
     return false;
