@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "rgbdslam/map/map_file.h"
 #include "rgbdslam/sync/memory_link.h"
 #include "rgbdslam/sync/mapper_sync.h"
 #include "rgbdslam/sync/tracker_sync.h"
@@ -411,6 +412,63 @@ TEST(SyncIntake, AReSendDuringItsIntegrationIsADuplicate) {
   int refinements = 0;
   while (sync.refine() && refinements < 100) ++refinements;
   EXPECT_TRUE(sync.converged()) << "after " << refinements << " refinements";
+}
+
+
+// rgbd-mapper --load-map FILE --map-id ID, killed and started again with the same flags: its
+// journal holds only the keyframes added after the file's, and they are re-integrated on top
+// of the file; a journal of another map is refused.
+TEST(SyncIntake, AMapperStartedFromAFileRestartsOnTopOfIt) {
+  const PinholeCamera camera = smallCamera();
+  Mapper saved(camera, MapperOptions{}, SlamMode::kDepthBa);
+  MapperSync saved_sync(&saved, MapperSyncOptions{});
+  for (KeyframeId k = 0; k < 4; ++k) {
+    ASSERT_EQ(saved_sync.offer({makeKeyframe(camera, k), {}}), IntakeVerdict::kQueued);
+    ASSERT_TRUE(saved_sync.integrateNext());
+  }
+  const auto bytes = encodeMapFile(saved.map(), camera, SlamMode::kDepthBa);
+  ASSERT_TRUE(bytes) << bytes.error();
+  const auto file = decodeMapFile(*bytes, "saved.map");
+  ASSERT_TRUE(file) << file.error();
+  ASSERT_EQ(file->nextKeyframeId(), 4);
+
+  MemoryJournal journal;
+  {  // the first process: the file, then three keyframes of the new session
+    Mapper mapper(camera, MapperOptions{}, SlamMode::kDepthBa);
+    MapperSync sync(&mapper, MapperSyncOptions{}, &journal);
+    mapper.load(*file);
+    sync.adopt(kMapId, file->nextKeyframeId());
+    EXPECT_EQ(sync.offer({makeKeyframe(camera, 2), {}}), IntakeVerdict::kDuplicate) << "the file's own";
+    for (KeyframeId k = 4; k < 7; ++k) {
+      ASSERT_EQ(sync.offer({makeKeyframe(camera, k), {}}), IntakeVerdict::kQueued);
+      ASSERT_TRUE(sync.integrateNext());
+    }
+    ASSERT_TRUE(sync.publishDue(kS));
+  }
+  ASSERT_EQ(journal.keyframes.size(), 3u);
+  EXPECT_EQ(journal.keyframes.front().keyframe.id, 4);
+  const int64_t last_version = journal.last_version;
+  ASSERT_GT(last_version, 0);
+
+  Mapper mapper(camera, MapperOptions{}, SlamMode::kDepthBa);  // restarted with the same flags
+  MapperSync sync(&mapper, MapperSyncOptions{}, &journal);
+  mapper.load(*file);
+  sync.adopt(kMapId, file->nextKeyframeId());
+  const Status restored = sync.restore(journal.keyframes, last_version);
+  ASSERT_TRUE(restored) << restored.error();
+  EXPECT_EQ(sync.counters().restored, 3);
+  EXPECT_EQ(mapper.map().numKeyframes(), 7u);
+  EXPECT_EQ(sync.mapId(), kMapId);
+  EXPECT_EQ(sync.offer({makeKeyframe(camera, 7), {}}), IntakeVerdict::kQueued);
+  const auto next = sync.publishDue(2 * kS);
+  ASSERT_TRUE(next);
+  EXPECT_GT(next->version, last_version) << "versions go on after the journaled ones";
+
+  Mapper other(camera, MapperOptions{}, SlamMode::kDepthBa);  // the journal of map 77 as map 78
+  MapperSync other_sync(&other, MapperSyncOptions{});
+  other.load(*file);
+  other_sync.adopt(kMapId + 1, file->nextKeyframeId());
+  EXPECT_FALSE(other_sync.restore(journal.keyframes, last_version));
 }
 
 }  // namespace
