@@ -5,7 +5,9 @@
 // rendered once; keyframe i carries the features of frame i % 80 under its own id and its
 // frame's pose shifted by 50 m per copy (rendering 1000 frames costs ~30 s). So every query
 // finds up to 12 copies of its place, the verification of all 10 candidates succeeds and the
-// result is kAmbiguous: the worst case for time. The query is a frame half-way between two keyframes.
+// result is kAmbiguous; verification stops once two verified poses are surely ambiguous (2 of
+// the 10). BM_PlaceRecogniseOnePlace puts the copies at one pose instead: all 10 verify and
+// agree, the worst case for time. The query is a frame half-way between two keyframes.
 // For comparison, BM_SmallBlurryImageRanking ranks 1000 keyframes by ZMSSD (PTAM's way).
 //
 // --measure (before the benchmark's own flags): recall and precision on synth:flight (3 min,
@@ -179,12 +181,14 @@ const PinholeCamera& benchCamera() {
   return camera;
 }
 
-PlaceDatabase benchDatabase(int keyframes) {
+// copy_shift_m: how far apart the copies of a place lie (50 m: other places that look the
+// same; 0: one place seen again and again, e.g. hovering).
+PlaceDatabase benchDatabase(int keyframes, double copy_shift_m = 50.0) {
   const std::vector<RenderedPlace>& places = benchPlaces();
   PlaceDatabase db(benchCamera(), PlaceRecognitionOptions{});
   for (int i = 0; i < keyframes; ++i) {
     const RenderedPlace& p = places[static_cast<size_t>(i) % places.size()];
-    const double shift = 50.0 * static_cast<double>(static_cast<size_t>(i) / places.size());
+    const double shift = copy_shift_m * static_cast<double>(static_cast<size_t>(i) / places.size());
     db.add(i, SE3(p.T_w_c.rotation(), p.T_w_c.translation() + Vec3(shift, 0, 0)), p.features);
   }
   return db;
@@ -221,6 +225,24 @@ void BM_PlaceRecognise(benchmark::State& state) {
   state.counters["verified"] = verified;
 }
 BENCHMARK(BM_PlaceRecognise)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+// The copies of each place at one pose: every candidate verifies and agrees, so the
+// verification cannot stop early (it does once two candidates are surely ambiguous): the
+// worst case since that early stop.
+void BM_PlaceRecogniseOnePlace(benchmark::State& state) {
+  const PlaceDatabase db = benchDatabase(static_cast<int>(state.range(0)), 0.0);
+  const RenderedPlace& query = benchQuery();
+  int verified = 0;
+  PlaceStatus status = PlaceStatus::kNoCandidate;
+  for (auto _ : state) {
+    const PlaceMatch match = db.recognise(query.features, PlaceExclusion{}, std::nullopt);
+    verified = static_cast<int>(match.verified.size());
+    status = match.status;
+  }
+  state.counters["verified"] = verified;
+  state.counters["recognised"] = status == PlaceStatus::kRecognised;
+}
+BENCHMARK(BM_PlaceRecogniseOnePlace)->Arg(100)->Arg(1000)->Unit(benchmark::kMillisecond);
 
 void BM_SmallBlurryImageRanking(benchmark::State& state) {
   const std::vector<RenderedPlace>& places = benchPlaces();

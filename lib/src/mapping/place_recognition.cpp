@@ -186,9 +186,18 @@ PlaceMatch PlaceDatabase::verify(const Features3d& features, const std::vector<P
   geometry.inlier_min_m = options_.inlier_min_m;
   geometry.min_inliers = options_.min_inliers;
   std::vector<const Entry*> keyframe_of;
+  std::vector<SE3> consistent_poses;      // verified and within the drift bound, so far...
+  std::vector<SE3> consistent_keyframes;  // ...and the poses of their keyframes
   for (const PlaceCandidate& candidate : candidates) {
     const Entry* keyframe = find(candidate.keyframe);
     if (!keyframe) continue;
+    // A keyframe within the ambiguity bound of one already verified sees the same place from
+    // the same view: it would give the same pose, so it is not verified again (~5 ms each;
+    // the same place seen again and again, e.g. hovering, took 10 verifications).
+    const bool same_view = std::any_of(consistent_keyframes.begin(), consistent_keyframes.end(), [&](const SE3& other) {
+      return !posesDisagree(other, keyframe->T_w_k, options_.ambiguity_m, options_.ambiguity_deg);
+    });
+    if (same_view) continue;
     const auto pose = poseFromFeatures(features, keyframe->features, keyframe->T_w_k, camera_, options_.pose, geometry);
     if (!pose || pose->inliers < options_.min_inlier_fraction * pose->matches) continue;
     const SE3 T_k_q = keyframe->T_w_k.inverse() * pose->T_w_c;
@@ -197,6 +206,16 @@ PlaceMatch PlaceDatabase::verify(const Features3d& features, const std::vector<P
     if (sigma.translation_m > options_.max_sigma_m || sigma.rotation_deg > options_.max_sigma_deg) continue;
     match.verified.push_back({keyframe->id, T_k_q, pose->T_w_c, pose->matches, pose->inliers, sigma});
     keyframe_of.push_back(keyframe);
+    // Two consistent poses more than twice the ambiguity bound apart: whichever turns out
+    // best, one of them disagrees with it (triangle inequality), so the verdict is
+    // kAmbiguous already and the other candidates need no verification (~5 ms each).
+    if (T_w_q_estimate && !withinDrift(*keyframe, *T_w_q_estimate, pose->T_w_c)) continue;
+    const bool ambiguous = std::any_of(consistent_poses.begin(), consistent_poses.end(), [&](const SE3& other) {
+      return posesDisagree(other, pose->T_w_c, 2.0 * options_.ambiguity_m, 2.0 * options_.ambiguity_deg);
+    });
+    if (ambiguous) break;
+    consistent_poses.push_back(pose->T_w_c);
+    consistent_keyframes.push_back(keyframe->T_w_k);
   }
   if (match.verified.empty()) {
     match.status = PlaceStatus::kNotVerified;
