@@ -21,11 +21,13 @@ echo "saved: $(split_value keyframes "$WORK/save.out") keyframes, $(split_value 
     > "$WORK/half.out" 2> "$WORK/half.err" || fail "saving run (150 frames) failed: $(tail -5 "$WORK/half.err")"
 half_keyframes=$(split_value keyframes "$WORK/half.out")
 
-# Bad uses, before the link is up (each fails on its arguments, before any LCM traffic).
+# Bad uses: each must fail on its arguments, before any LCM traffic; each still runs in a
+# private namespace of its own (scripts/netns-run), so that a regression could not reach the
+# host's interfaces.
 expect_usage_error() {  # expect_usage_error TEXT PROC ARGS...
   local text=$1 proc=$2 status=0
   shift 2
-  "$PROCS/$proc" --camera "$SRC/config/cameras/synthetic.yaml" --lcm-url "udpm://239.255.76.67:7667?ttl=0" "$@" \
+  "$NETNS_RUN" "$PROCS/$proc" --camera "$SRC/config/cameras/synthetic.yaml" --lcm-url "$LCM_URL" "$@" \
       > /dev/null 2> "$WORK/bad.err" || status=$?
   [ "$status" -eq 2 ] || fail "$proc $*: expected status 2, got $status: $(cat "$WORK/bad.err")"
   grep -q -- "$text" "$WORK/bad.err" || fail "$proc $*: expected '$text': $(cat "$WORK/bad.err")"

@@ -159,33 +159,32 @@ PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) cons
 }
 
 // The solution into the map, if it moves some keyframe by more than min_correction_*: every
-// keyframe to its new pose, every point with its source keyframe.
+// keyframe to its new pose, every point with its source keyframe (movePointsWithKeyframes).
 bool LoopCloser::apply(Map* map, const PoseGraphResult& solved, const PoseGraph& graph, MapChanges* changes,
                        LoopClosureResult* result) const {
-  std::vector<SE3> moves;  // T_w_k' T_w_k^-1 per node
-  moves.reserve(graph.nodes.size());
+  std::vector<KeyframePose> before;
+  before.reserve(graph.nodes.size());
   for (size_t i = 0; i < graph.nodes.size(); ++i) {
-    const SE3 move = solved.poses[i].T_w_c * graph.nodes[i].T_w_k.inverse();
-    moves.push_back(move);
+    before.push_back(KeyframePose{graph.nodes[i].id, graph.nodes[i].T_w_k});
     result->correction_m = std::max(result->correction_m, (solved.poses[i].T_w_c.translation() - graph.nodes[i].T_w_k.translation()).norm());
-    result->correction_deg = std::max(result->correction_deg, loopAngleDeg(move));
+    result->correction_deg = std::max(result->correction_deg, loopAngleDeg(solved.poses[i].T_w_c * graph.nodes[i].T_w_k.inverse()));
   }
   if (result->correction_m <= options_.min_correction_m && result->correction_deg <= options_.min_correction_deg) {
     return false;
   }
-  std::map<KeyframeId, const SE3*> move_of;
-  for (size_t i = 0; i < graph.nodes.size(); ++i) {
-    Keyframe* kf = map->keyframe(graph.nodes[i].id);
-    kf->T_w_c = solved.poses[i].T_w_c;
-    changes->keyframes.insert(kf->id);
-    move_of[kf->id] = &moves[i];
+  for (const KeyframePose& pose : solved.poses) {
+    map->keyframe(pose.id)->T_w_c = pose.T_w_c;
+    changes->keyframes.insert(pose.id);
   }
-  for (const auto& [pid, point] : map->points()) {
-    const auto move = move_of.find(point.source_keyframe);
-    if (move == move_of.end()) continue;
-    MapPoint* p = map->point(pid);
-    p->p_w = *move->second * p->p_w;
-    changes->points.insert(pid);
+  std::vector<MapPointData> points;
+  points.reserve(map->numPoints());
+  for (const auto& [pid, point] : map->points()) points.push_back(point.data());
+  movePointsWithKeyframes(before, solved.poses, &points);
+  for (const MapPointData& p : points) {
+    MapPoint* point = map->point(p.id);
+    if (point->p_w == p.p_w) continue;
+    point->p_w = p.p_w;
+    changes->points.insert(p.id);
   }
   result->closed = true;
   return true;
