@@ -88,6 +88,11 @@ void DepthAlignmentOptions::bind(OptionRegistry* r, const std::string& s) {
           "fewer samples agreeing with the aligned pose: depth does not hold it");
   r->bind(s, "depth_align_min_inlier_ratio", &min_inlier_ratio, 0.0, 1.0, "",
           "...nor when fewer than this fraction of the samples with a reading agree");
+  r->bind(s, "depth_align_reference_step_m", &reference_step_m, 0.0, 10.0, "m",
+          "a depth-aided frame's surfaces become the reference for the next frames' "
+          "alignment once the camera is this far from the last reference (0: no reference)");
+  r->bind(s, "depth_align_reference_step_deg", &reference_step_deg, 0.0, 180.0, "deg",
+          "...or turned this far from it");
 }
 
 std::vector<SurfaceSample> sampleSurface(const cv::Mat& depth_m, const PinholeCamera& camera,

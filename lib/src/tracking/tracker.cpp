@@ -107,6 +107,7 @@ class Tracker::Impl {
     offset_ = PublishedOffset{};
     last_utime_.reset();
     published_history_.clear();
+    depth_reference_.reset();
   }
 
  private:
@@ -162,6 +163,7 @@ class Tracker::Impl {
   // attempt unchanged when depth does not hold the pose either.
   bool depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const;
   Attempt alignWithDepth(const Attempt& attempt, const RgbdFrame& frame);
+  void updateDepthReference(const Attempt& attempt, const RgbdFrame& frame);
   // What a keyframe leaves the tracker besides its pyramid (depth modes): surface samples
   // (depth-aided tracking) and 3-D features (relocalisation from anywhere), made on the
   // keyframe worker so that the frame which makes the keyframe does not wait for them.
@@ -259,6 +261,14 @@ class Tracker::Impl {
   std::vector<uint8_t> inliers_;
   std::vector<double> depths_, displacements_;
   std::vector<SlotOutcome> outcome_;
+  // Depth-aided tracking's own reference (DepthAlignmentOptions::reference_step_m): the
+  // surfaces of a recent depth-aided frame, made on the worker, and that frame's pose; none
+  // while the points alone hold the pose.
+  struct DepthReference {
+    std::shared_future<std::vector<SurfaceSample>> samples;
+    SE3 T_w_c;
+  };
+  std::optional<DepthReference> depth_reference_;
   // Makes the keyframes' extras; last, so that it is joined before anything else goes.
   BackgroundWorker keyframe_worker_;
   // J^T W J of the last fine stage's pose fit (zero when it failed).
@@ -573,6 +583,7 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
     appendAnchors(extras->surface, replica_.map().keyframe(id)->T_w_c, &anchors_);
     if (++used >= static_cast<size_t>(o.keyframes)) break;
   }
+  if (depth_reference_) appendAnchors(depth_reference_->samples.get(), depth_reference_->T_w_c, &anchors_);
   if (anchors_.empty()) return attempt;
   // The found points (inliers of the fine stage) with their depth, and the surfaces.
   observations_.clear();
@@ -650,6 +661,29 @@ void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
       });
 }
 
+// A new reference once the camera has moved on from the last one; none once the points hold
+// the pose again (a stale reference would be a second, older map in the fit).
+void Tracker::Impl::updateDepthReference(const Attempt& attempt, const RgbdFrame& frame) {
+  const DepthAlignmentOptions& o = options_.depth_align;
+  if (!attempt.depth_aided || o.reference_step_m <= 0.0) {
+    depth_reference_.reset();
+    return;
+  }
+  const SE3 T_w_c = T_c_w_.inverse();
+  if (depth_reference_ &&
+      (T_w_c.translation() - depth_reference_->T_w_c.translation()).norm() < o.reference_step_m &&
+      T_w_c.rotation().angularDistance(depth_reference_->T_w_c.rotation()) < o.reference_step_deg * M_PI / 180.0) {
+    return;
+  }
+  const cv::Mat depth = depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
+                                      options_.keyframe_build.max_depth_m);
+  depth_reference_ = DepthReference{
+      keyframe_worker_.submit([depth, camera = camera_, noise = options_.pose.noise, align = o] {
+        return sampleSurface(depth, camera, noise, align);
+      }),
+      T_w_c};
+}
+
 const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) const {
   const auto extras = extras_.find(id);
   return extras == extras_.end() ? nullptr : &extras->second.get();
@@ -689,6 +723,7 @@ void Tracker::Impl::followMapCorrection() {
   const SE3 old_published = published(old_pose);
   const SE3 new_pose = correction * old_pose;
   if (options_.follow_map_corrections) T_c_w_ = new_pose.inverse();
+  if (depth_reference_) depth_reference_->T_w_c = correction * depth_reference_->T_w_c;
   offset_.position = old_published.translation() - new_pose.translation();
   offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
 }
@@ -758,6 +793,7 @@ TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason
   state_ = TrackingState::kLost;
   velocity_.setZero();
   last_quality_ = 0.0;
+  depth_reference_.reset();
   TrackResult result;
   result.status = TrackStatus::kLost;
   result.pose.state = TrackingState::kLost;
@@ -827,6 +863,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   T_c_w_ = attempt.T_c_w;
   last_quality_ = attempt.quality;
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
+  updateDepthReference(attempt, frame);
   for (PointSlot* slot : stage_) {
     if (slot->depth_verdict != static_cast<int8_t>(DepthVerdict::kUnchecked)) {
       ++slot->depth_checks;

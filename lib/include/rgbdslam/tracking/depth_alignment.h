@@ -65,6 +65,16 @@ struct DepthAlignmentOptions {
   double max_step_m = 0.05;       // [m]
   double max_step_deg = 5.0;      // [deg]
   double min_inlier_ratio = 0.5;  // ...nor when fewer than this fraction of those associated agree
+  // The depth reference: a depth-aided frame's own surfaces join the next frames' alignment,
+  // so that depth keeps holding the pose where the camera has moved past the keyframes' view
+  // (a plain office: lost for good once the two nearest keyframes' surfaces left the image).
+  // A new reference is taken from an accepted depth-aided frame once the camera is this far
+  // from the last one's pose. Each new reference passes its alignment error on, as in frame-
+  // to-keyframe depth odometry (DVO-SLAM, KinectFusion), so fewer references drift less;
+  // the map's keyframes stay in the fit and hold the pose wherever they are in view.
+  // 0 turns the reference off.
+  double reference_step_m = 0.1;     // [m]
+  double reference_step_deg = 10.0;  // [deg]
 
   void bind(OptionRegistry* registry, const std::string& section);  // as depth_align_*
 };
