@@ -70,5 +70,44 @@ TEST(DepthIntegrity, NoVerdictWithoutEnoughReadings) {
   EXPECT_FALSE(check(wallFrame(9.0), SE3()).judged);
 }
 
+// Where the pose puts the wall's points, the sensor reads nothing (past its range, as a far
+// wall behind where a wrong pose puts a side wall): a verdict only for points whose surface
+// gave readings before, and only when most of the points judged lack one.
+TEST(DepthIntegrity, AMissingReadingWhereTheSurfaceGivesOneSeesThrough) {
+  const std::vector<Vec3> points = wallPoints(2.0);
+  RgbdFrame frame = wallFrame(9.0);  // beyond the 8 m range: no reading anywhere
+  const std::vector<uint8_t> expected(points.size(), 1), unknown(points.size(), 0);
+  std::vector<DepthVerdict> verdicts;
+  const auto run = [&](const std::vector<uint8_t>& reading_expected) {
+    return checkDepthIntegrity(points, SE3(), frame, camera(), NoiseModel{}, 0.3, 8.0, DepthIntegrityOptions{},
+                               &verdicts, &reading_expected);
+  };
+  const DepthIntegrity all_missing = run(expected);
+  EXPECT_EQ(all_missing.missing, static_cast<int>(points.size()));
+  EXPECT_EQ(all_missing.missing_counted, static_cast<int>(points.size()));
+  EXPECT_TRUE(all_missing.judged);
+  EXPECT_FALSE(all_missing.consistent);
+  EXPECT_EQ(verdicts.front(), DepthVerdict::kMissing);
+  EXPECT_NE(all_missing.describe().find("without the reading"), std::string::npos);
+  // Points whose surface never gave a reading (dark, shiny, far): no verdict.
+  const DepthIntegrity never_read = run(unknown);
+  EXPECT_FALSE(never_read.judged);
+  EXPECT_TRUE(never_read.consistent);
+  // A hole over the left third of the wall (shiny material at this angle): consistent.
+  frame = wallFrame(2.0);
+  frame.depth.colRange(0, 55).setTo(0);
+  const DepthIntegrity hole = run(expected);
+  EXPECT_GT(hole.missing_counted, 0);
+  EXPECT_LT(hole.missingRatio(), 0.5);
+  EXPECT_TRUE(hole.consistent);
+  // Points beyond the range are not expected to have a reading.
+  const std::vector<Vec3> far = wallPoints(10.0);
+  frame = wallFrame(9.0);
+  EXPECT_EQ(checkDepthIntegrity(far, SE3(), frame, camera(), NoiseModel{}, 0.3, 8.0, DepthIntegrityOptions{},
+                                nullptr, &expected)
+                .missing,
+            0);
+}
+
 }  // namespace
 }  // namespace rgbdslam

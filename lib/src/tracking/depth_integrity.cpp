@@ -18,17 +18,26 @@ void DepthIntegrityOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "integrity_free_space_min_m", &free_space_min_m, 0.0, 10.0, "m", "...and by at least this");
   r->bind(s, "integrity_max_free_space_ratio", &max_free_space_ratio, 0.0, 1.0, "",
           "a pose that sees through more than this fraction of the checked points is inconsistent");
+  r->bind(s, "integrity_max_missing_ratio", &max_missing_ratio, 0.0, 1.0, "",
+          "...or finds no reading near more than this fraction of the points judged, where each "
+          "point's surface gave a reading at most of its accepted poses");
 }
 
 std::string DepthIntegrity::describe() const {
-  return std::to_string(seen_through) + " of " + std::to_string(checked) + " map points seen through in depth";
+  std::string text = std::to_string(seen_through) + " of " + std::to_string(checked) + " map points seen through in depth";
+  if (missing_counted > 0) {
+    text += ", " + std::to_string(missing_counted) + " of " + std::to_string(checked + missing_counted) +
+            " without the reading their surface gives";
+  }
+  return text;
 }
 
 DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3& T_c_w,
                                    const RgbdFrame& frame, const PinholeCamera& camera,
                                    const NoiseModel& noise, double min_depth_m, double max_depth_m,
                                    const DepthIntegrityOptions& options,
-                                   std::vector<DepthVerdict>* verdicts) {
+                                   std::vector<DepthVerdict>* verdicts,
+                                   const std::vector<uint8_t>* reading_expected) {
   DepthIntegrity out;
   if (verdicts) verdicts->assign(points_w.size(), DepthVerdict::kUnchecked);
   if (frame.depth.empty() || frame.depth.type() != CV_16UC1 || !(frame.depth_scale > 0) || points_w.empty()) return out;
@@ -52,7 +61,13 @@ DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3&
         if (raw >= raw_min && raw <= raw_max && (nearest == 0 || raw < nearest)) nearest = raw;
       }
     }
-    if (nearest == 0) continue;
+    if (nearest == 0) {
+      if (p_c.z() > max_depth_m) continue;  // beyond the range: no reading is what it gives
+      ++out.missing;
+      if (verdicts) (*verdicts)[i] = DepthVerdict::kMissing;
+      if (reading_expected && i < reading_expected->size() && (*reading_expected)[i]) ++out.missing_counted;
+      continue;
+    }
     const double measured = nearest / frame.depth_scale, predicted = p_c.z();
     const double sigma = std::hypot(noise.sigmaDepth(measured), noise.sigmaDepth(predicted));
     const double margin = std::max(options.free_space_sigmas * sigma, options.free_space_min_m);
@@ -74,8 +89,9 @@ DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3&
     std::nth_element(residuals.begin(), mid, residuals.end());
     out.median_abs_residual = *mid;
   }
-  out.judged = out.checked >= options.min_samples;
-  out.consistent = !out.judged || out.seenThroughRatio() <= options.max_free_space_ratio;
+  out.judged = out.checked + out.missing_counted >= options.min_samples;
+  out.consistent = !out.judged || (out.seenThroughRatio() <= options.max_free_space_ratio &&
+                                    out.missingRatio() <= options.max_missing_ratio);
   return out;
 }
 

@@ -223,6 +223,7 @@ class Tracker::Impl {
   std::vector<Vec3> integrity_points_;  // scratch: the points the check projects...
   std::vector<PointSlot*> integrity_slots_;  // ...their slots
   std::vector<DepthVerdict> integrity_verdicts_;
+  std::vector<uint8_t> reading_expected_;
   // A pose relocalised by features is tracked again from where it ended, this many times at
   // most, while the quality stays above this fraction of the previous pass's.
   static constexpr int kRelocaliseRefinePasses = 2;
@@ -501,16 +502,19 @@ DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFram
   // Points seen through at most of their accepted poses (glass, wrong points) say nothing.
   integrity_points_.clear();
   integrity_slots_.clear();
+  reading_expected_.clear();
   for (PointSlot* slot : stage_) {
     slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
     if (slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_seen_through > slot->depth_checks) continue;
     integrity_points_.push_back(slot->point->p_w);
     integrity_slots_.push_back(slot);
+    // Its surface gave a reading at most of its checks: a missing one now is seen through.
+    reading_expected_.push_back(slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_missing < slot->depth_checks);
   }
   const DepthIntegrity integrity =
       checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,
                           options_.keyframe_build.min_depth_m, options_.keyframe_build.max_depth_m,
-                          options_.integrity, &integrity_verdicts_);
+                          options_.integrity, &integrity_verdicts_, &reading_expected_);
   for (size_t i = 0; i < integrity_slots_.size(); ++i) {
     integrity_slots_[i]->depth_verdict = static_cast<int8_t>(integrity_verdicts_[i]);
   }
@@ -868,6 +872,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
     if (slot->depth_verdict != static_cast<int8_t>(DepthVerdict::kUnchecked)) {
       ++slot->depth_checks;
       slot->depth_seen_through += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kSeenThrough);
+      slot->depth_missing += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kMissing);
       slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
     }
     if (!slot->searched) continue;
