@@ -508,8 +508,11 @@ DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFram
     if (slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_seen_through > slot->depth_checks) continue;
     integrity_points_.push_back(slot->point->p_w);
     integrity_slots_.push_back(slot);
-    // Its surface gave a reading at most of its checks: a missing one now is seen through.
-    reading_expected_.push_back(slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_missing < slot->depth_checks);
+    // Found where the pose puts it (so not hidden by something nearer than the sensor's
+    // range, which gives no reading either), and its surface gave a reading at most of its
+    // checks: a missing one now is seen through.
+    reading_expected_.push_back(slot->found && slot->depth_checks >= kDepthRecordMin &&
+                                2 * slot->depth_missing < slot->depth_checks);
   }
   const DepthIntegrity integrity =
       checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,

@@ -15,9 +15,11 @@
 // No reading near a point that lies within the sensor's range is also a verdict: the ray went
 // past the range (seen through: a wrong pose that puts a side wall's points where the image
 // shows a far wall beyond 8 m), or the surface gives none (dark, shiny, an edge, an IR
-// shadow). Which of the two only the point's record tells: where the caller says the point's
-// surface gave a reading at most of its accepted poses ('reading_expected'), a missing one
-// counts as seen through, but weighs less: holes on shiny and dark material come and go with
+// shadow), or something nearer than the sensor's minimum range hides it (a hand, a cabinet
+// passing close by). The caller tells them apart ('reading_expected'): the tracker expects a
+// reading only at points found in the image where the pose puts them (not hidden) whose
+// surface gave a reading at most of their accepted poses; there a missing one counts as seen
+// through, but weighs less: holes on shiny and dark material come and go with
 // the viewing angle, so the pose is judged on them only when most of the points judged lack
 // one (max_missing_ratio). Measured on the flight: at a right pose in its first spin (frame
 // 210) 16 of 68 points lacked the reading their record promised; counted as seen through at
