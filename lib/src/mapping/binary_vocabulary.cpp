@@ -2,20 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdslam/synth/scene.h"
 #include "rgbdslam/tracking/feature_relocaliser.h"
+#include "rgbdslam/util/hamming.h"
 
 namespace rgbdslam {
 namespace {
 
-constexpr int kVocabDescriptorBytes = 32;
+constexpr int kVocabDescriptorBytes = kBinaryDescriptorBytes;
 
-int vocabHamming(const uint8_t* a, const uint8_t* b) {
-  return cv::hal::normHamming(a, b, kVocabDescriptorBytes);
-}
+int vocabHamming(const uint8_t* a, const uint8_t* b) { return hamming256(a, b); }
 
 // The bitwise majority of the rows 'members' of 'descriptors' (ties give 0).
 cv::Mat majorityOf(const cv::Mat& descriptors, const std::vector<int>& members) {

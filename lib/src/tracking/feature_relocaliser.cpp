@@ -3,15 +3,15 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/features2d.hpp>
 #include <random>
+
+#include "rgbdslam/util/hamming.h"
 
 namespace rgbdslam {
 namespace {
 
 constexpr uint32_t kRelocRansacSeed = 20261124;  // fixed: the same frame gives the same pose
-constexpr int kOrbDescriptorBytes = 32;
 
 struct FeatureMatch {
   int frame = 0, keyframe = 0;
@@ -21,10 +21,13 @@ struct FeatureMatch {
 // second nearest by Lowe's ratio.
 std::vector<FeatureMatch> matchByRatio(const cv::Mat& frame, const cv::Mat& keyframe, double ratio) {
   std::vector<FeatureMatch> matches;
+  for (const cv::Mat* d : {&frame, &keyframe}) {
+    if (d->rows > 0 && (d->type() != CV_8UC1 || d->cols != kBinaryDescriptorBytes)) return matches;
+  }
   for (int i = 0; i < frame.rows; ++i) {
     int best = INT32_MAX, second = INT32_MAX, best_j = -1;
     for (int j = 0; j < keyframe.rows; ++j) {
-      const int d = cv::hal::normHamming(frame.ptr<uint8_t>(i), keyframe.ptr<uint8_t>(j), kOrbDescriptorBytes);
+      const int d = hamming256(frame.ptr<uint8_t>(i), keyframe.ptr<uint8_t>(j));
       if (d < best) {
         second = best;
         best = d;
