@@ -512,7 +512,7 @@ DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFram
     // range, which gives no reading either), and its surface gave a reading at most of its
     // checks: a missing one now is seen through.
     reading_expected_.push_back(slot->found && slot->depth_checks >= kDepthRecordMin &&
-                                2 * slot->depth_missing < slot->depth_checks);
+                                slot->depth_missing < slot->depth_checks);
   }
   const DepthIntegrity integrity =
       checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,
@@ -873,9 +873,12 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   updateDepthReference(attempt, frame);
   for (PointSlot* slot : stage_) {
     if (slot->depth_verdict != static_cast<int8_t>(DepthVerdict::kUnchecked)) {
-      ++slot->depth_checks;
+      // A check without a reading is counted apart, so that the glass rule (seen through at
+      // most of the checks with a reading) keeps its meaning.
+      const bool missing = slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kMissing);
+      slot->depth_checks += !missing;
+      slot->depth_missing += missing;
       slot->depth_seen_through += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kSeenThrough);
-      slot->depth_missing += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kMissing);
       slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
     }
     if (!slot->searched) continue;

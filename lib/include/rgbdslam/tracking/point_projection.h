@@ -57,8 +57,8 @@ struct PointSlot {
   Eigen::Vector2d found_uv = Eigen::Vector2d::Zero();  // level 0
   int found_level = 0;
   // The depth integrity check (depth_integrity.h) at accepted poses: how often the point was
-  // checked, seen through (glass, a wrong point) and without a reading (dark, shiny), and the
-  // current frame's verdict.
+  // checked with a reading, seen through (glass, a wrong point), and checked without a
+  // reading (dark, shiny), and the current frame's verdict.
   int depth_checks = 0, depth_seen_through = 0, depth_missing = 0;
   int8_t depth_verdict = 0;  // DepthVerdict of the last check
 };
