@@ -173,6 +173,33 @@ TEST(Patch, ZmssdIgnoresABrightnessOffset) {
   }
 }
 
+// At integer centres the sub-pixel ZMSSD is the integer one (up to rounding); on an image
+// whose content moved by a fraction of a pixel it finds the template where the content went;
+// it grows with the offset, and -1 outside the image.
+TEST(Patch, SubpixelZmssdSamplesBilinearly) {
+  const cv::Mat image = smoothTexture(80, 60, Eigen::Vector2d::Zero());
+  Patch patch;
+  ASSERT_TRUE(extractPatch(image, {30, 30}, &patch));
+  for (const cv::Point2i p : {cv::Point2i(30, 30), cv::Point2i(40, 25), cv::Point2i(12, 40)}) {
+    EXPECT_NEAR(zmssdAtSubpixel(patch, image, Eigen::Vector2d(p.x, p.y)), zmssdAt(patch, image, p), 1.0) << p;
+  }
+  const Eigen::Vector2d shift(0.4, -0.3);
+  const cv::Mat moved = bilinearShift(image, shift);
+  const Eigen::Vector2d there = Eigen::Vector2d(30, 30) + shift;
+  const int at_the_content = zmssdAtSubpixel(patch, moved, there);
+  EXPECT_LT(at_the_content, zmssdAt(patch, moved, {30, 30}));
+  EXPECT_LT(at_the_content, 64 * 2);  // the two roundings: under a grey level per pixel
+  int previous = at_the_content;
+  for (double offset : {0.5, 1.0, 2.0}) {
+    const int score = zmssdAtSubpixel(patch, moved, there + Eigen::Vector2d(offset, 0.0));
+    EXPECT_GT(score, previous) << offset;
+    previous = score;
+  }
+  EXPECT_EQ(zmssdAtSubpixel(patch, image, Eigen::Vector2d(3.5, 30)), -1);
+  EXPECT_EQ(zmssdAtSubpixel(patch, image, Eigen::Vector2d(30, 56.0)), -1);
+  EXPECT_GE(zmssdAtSubpixel(patch, image, Eigen::Vector2d(4.0, 30)), 0);
+}
+
 TEST(Patch, SearchFindsShiftedPatchesAmongCorners) {
   const cv::Mat image = texture(320, 240, 1.3, 7);
   const cv::Point2i offset(3, -2);

@@ -134,6 +134,31 @@ int zmssdAt(const Patch& patch, const cv::Mat& image, cv::Point2i centre) {
   return sum_dd - (sum_d * sum_d) / kPatchArea;
 }
 
+int zmssdAtSubpixel(const Patch& patch, const cv::Mat& image, const Eigen::Vector2d& centre) {
+  assert(image.type() == CV_8UC1);
+  // Template offset o samples the image at centre + o; its top-left pixel at (x0, y0).
+  const double left = centre.x() - kPatchCentre, top = centre.y() - kPatchCentre;
+  if (!(left >= 0.0 && top >= 0.0 && left + kPatchSize < image.cols && top + kPatchSize < image.rows)) return -1;
+  const int x0 = static_cast<int>(left), y0 = static_cast<int>(top);
+  const int fx = static_cast<int>(std::lround((left - x0) * 256.0));
+  const int fy = static_cast<int>(std::lround((top - y0) * 256.0));
+  const int w00 = (256 - fx) * (256 - fy), w01 = fx * (256 - fy), w10 = (256 - fx) * fy, w11 = fx * fy;
+  const size_t stride = image.step[0];
+  const uint8_t* tpl = patch.pixels.data();
+  int64_t sum_d = 0, sum_dd = 0;  // in 1/256 grey levels
+  for (int r = 0; r < kPatchSize; ++r, tpl += kPatchSize) {
+    const uint8_t* a = image.ptr<uint8_t>(y0 + r) + x0;
+    const uint8_t* b = a + stride;
+    for (int c = 0; c < kPatchSize; ++c) {
+      const int sampled = (w00 * a[c] + w01 * a[c + 1] + w10 * b[c] + w11 * b[c + 1] + 128) >> 8;
+      const int64_t d = tpl[c] * 256 - sampled;
+      sum_d += d;
+      sum_dd += d * d;
+    }
+  }
+  return static_cast<int>((sum_dd - sum_d * sum_d / kPatchArea + 32768) >> 16);
+}
+
 std::optional<cv::Point2i> searchPatch(const Patch& patch, const cv::Mat& level_image,
                                        const LevelCorners& corners,
                                        const Eigen::Vector2d& predicted_level, int radius,

@@ -92,11 +92,7 @@ bool ensurePatch(PointSlot* slot, double tolerance) {
 
 namespace rgbdslam {
 
-namespace {
-
-// ZMSSD acceptance for one patch (PointSearchOptions::max_zmssd_energy_ratio and
-// max_zmssd_flat_ratio).
-int acceptanceFor(const Patch& patch, const PointSearchOptions& options) {
+int patchAcceptance(const Patch& patch, const PointSearchOptions& options) {
   const double energy =
       patch.sum_sq - static_cast<double>(patch.sum) * patch.sum / kPatchArea;
   const int accepted = std::max(options.max_zmssd_per_pixel * kPatchArea,
@@ -104,6 +100,8 @@ int acceptanceFor(const Patch& patch, const PointSearchOptions& options) {
   if (options.max_zmssd_flat_ratio <= 0.0) return accepted;
   return std::min(accepted, static_cast<int>(options.max_zmssd_flat_ratio * energy));
 }
+
+namespace {
 
 // The pixel within 'radius' [px] (Euclidean) of 'predicted' whose ZMSSD is smallest and
 // below max_zmssd; nullopt if none.
@@ -166,7 +164,7 @@ int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyram
     slot->searched = true;
     const Eigen::Vector2d predicted_level = levelFromZero(slot->uv, level);
     const cv::Mat& image = pyramid.levels[level];
-    const int max_zmssd = acceptanceFor(slot->patch, options);
+    const int max_zmssd = patchAcceptance(slot->patch, options);
     auto match = searchPatch(slot->patch, image, corners[level], predicted_level,
                              radius_px, max_zmssd);
     if (!match && options.dense_fallback) {

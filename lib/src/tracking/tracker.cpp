@@ -1,6 +1,7 @@
 #include "rgbdslam/tracking/tracker.h"
 #include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
+#include "rgbdslam/tracking/photometric_integrity.h"
 #include "rgbdslam/tracking/feature_relocaliser.h"
 
 #include <algorithm>
@@ -27,6 +28,21 @@ namespace {
 using TrackStatus = TrackResult::Status;
 
 // The result of tracking one frame from a start pose.
+// Both integrity checks of one pose; the reason names the checks that refused it.
+struct PoseIntegrity {
+  PhotometricIntegrity image;
+  DepthIntegrity depth;
+  bool consistent() const { return image.consistent && depth.consistent; }
+  std::string describe() const {
+    std::string reason;
+    if (!image.consistent) reason = "the image disagrees with the pose: " + image.describe();
+    if (!depth.consistent) {
+      reason += (reason.empty() ? "" : "; ") + std::string("depth disagrees with the pose: ") + depth.describe();
+    }
+    return reason;
+  }
+};
+
 struct Attempt {
   SE3 T_c_w;
   int searched = 0;
@@ -151,9 +167,10 @@ class Tracker::Impl {
                            std::vector<Measurement> measurements);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
   double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
-  // The integrity check (depth_integrity.h) of an attempt's pose; consistent when the
-  // check is off, in mono, or without a depth image.
-  DepthIntegrity integrityOf(const Attempt& attempt, const RgbdFrame& frame);
+  // The integrity checks of an attempt's pose: the image (photometric_integrity.h, every
+  // mode) and the depth image (depth_integrity.h; not in mono, nor without a depth image).
+  PoseIntegrity integrityOf(const Attempt& attempt, const RgbdFrame& frame);
+  DepthIntegrity depthIntegrityOf(const Attempt& attempt, const RgbdFrame& frame);
   // An attempt the check refused is tracked again, fine stage only, from the prediction and
   // from the last good pose; the first that passes both checks is returned.
   std::optional<Attempt> retryConsistent(const SE3& predicted, const RgbdFrame& frame);
@@ -439,10 +456,10 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   }
   if (depthAidWanted(attempt, frame)) attempt = alignWithDepth(attempt, frame);
   if (isLost(attempt)) return lostResult(attempt, lossReason(attempt), false);
-  if (const DepthIntegrity integrity = integrityOf(attempt, frame); !integrity.consistent) {
+  if (const PoseIntegrity integrity = integrityOf(attempt, frame); !integrity.consistent()) {
     frame_inconsistent_ = true;
     std::optional<Attempt> retried = retryConsistent(predicted, frame);
-    if (!retried) return lostResult(attempt, "depth disagrees with the pose: " + integrity.describe(), true);
+    if (!retried) return lostResult(attempt, integrity.describe(), true);
     attempt = *retried;
   }
   // PTAM's grade (found / searched) decides keyframes; the report also asks for precision.
@@ -482,7 +499,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // glass cabinets close by) the quality stays below good although the pose is right,
     // and a tracker that lost such a stretch once would otherwise never come back.
     if (isLost(attempt) || (!near_last && attempt.quality < options_.quality.good)) continue;
-    if (!integrityOf(attempt, frame).consistent) continue;  // a wrong pose is worse than none
+    if (!integrityOf(attempt, frame).consistent()) continue;  // a wrong pose is worse than none
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
@@ -497,7 +514,15 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   return result;
 }
 
-DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFrame& frame) {
+PoseIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFrame& frame) {
+  PoseIntegrity integrity;
+  integrity.image = checkPhotometricIntegrity(stage_, attempt.T_c_w, pyramid_, camera_, options_.search,
+                                              options_.photometric);
+  integrity.depth = depthIntegrityOf(attempt, frame);
+  return integrity;
+}
+
+DepthIntegrity Tracker::Impl::depthIntegrityOf(const Attempt& attempt, const RgbdFrame& frame) {
   if (!options_.integrity.enabled || !depthInTracking(mode_) || frame.depth.empty()) return DepthIntegrity{};
   // Points seen through at most of their accepted poses (glass, wrong points) say nothing.
   integrity_points_.clear();
@@ -527,7 +552,7 @@ DepthIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFram
 std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, const RgbdFrame& frame) {
   for (const SE3& start : {predicted, T_c_w_}) {
     const Attempt retry = trackFrom(start, frame, Coarse::kNever);
-    if (!isLost(retry) && integrityOf(retry, frame).consistent) return retry;
+    if (!isLost(retry) && integrityOf(retry, frame).consistent()) return retry;
   }
   return std::nullopt;
 }
@@ -568,7 +593,7 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
       }
       attempt = again;
     }
-    if (!integrityOf(attempt, frame).consistent) continue;
+    if (!integrityOf(attempt, frame).consistent()) continue;
     return attempt;
   }
   return std::nullopt;

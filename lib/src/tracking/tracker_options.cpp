@@ -92,6 +92,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "most similar keyframes tried per frame when lost");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
+  photometric.bind(r, s);
   depth_align.bind(r, s);
   reloc_features.bind(r, s);
   local_map.bind(r, s);

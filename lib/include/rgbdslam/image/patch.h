@@ -73,6 +73,10 @@ bool extractPatch(const cv::Mat& level_image, cv::Point2i centre, Patch* out);
 // Invariant to adding a constant to the image (while nothing saturates). The caller keeps
 // columns centre.x-4..centre.x+3 and rows centre.y-4..centre.y+3 inside the image.
 int zmssdAt(const Patch& patch, const cv::Mat& image, cv::Point2i centre);
+// The same at a sub-pixel centre [px of the image's level], the image sampled bilinearly
+// (in 1/256 grey steps, rounded back to grey levels^2). -1 if the patch (and the one pixel
+// the interpolation reads beyond it) leaves the image.
+int zmssdAtSubpixel(const Patch& patch, const cv::Mat& image, const Eigen::Vector2d& centre);
 // True if a patch centred at 'centre' lies inside the image.
 inline bool patchInImage(const cv::Mat& image, cv::Point2i centre) {
   return centre.x >= kPatchCentre && centre.y >= kPatchCentre &&

@@ -118,6 +118,9 @@ struct PointSearchOptions {
   void bind(OptionRegistry* registry, const std::string& section);  // all but subpixel
 };
 
+// The ZMSSD below which the search accepts 'patch' (the options' three acceptance rules).
+int patchAcceptance(const Patch& patch, const PointSearchOptions& options);
+
 // Searches each slot's (warped) patch among the FAST corners of its search level within
 // radius_px [px at the search level] of its predicted pixel (and, with dense_fallback, at
 // every pixel in the radius when no corner is accepted) and refines the best match to

@@ -8,8 +8,9 @@
 //   levels with a wide search, only when the image is predicted to move more than the fine
 //   search covers; fine stage: many points). Tracking quality (fraction found) gives
 //   tracking / dodgy / lost, and a frame whose found points do not fix the pose (its
-//   standard deviation from the fit) is lost too, and so is one whose pose the depth image
-//   contradicts (depth_integrity.h; after retries from the prediction and the last pose);
+//   standard deviation from the fit) is lost too, and so is one whose pose the image or the
+//   depth image contradicts (photometric_integrity.h, depth_integrity.h; after retries from
+//   the prediction and the last pose);
 //   where the points found are too few to fix the pose, the depth image joins the fit
 //   (point-to-plane against the nearest keyframes' surfaces, depth_alignment.h) and the
 //   frame is dodgy if that fixes it, lost if not;
@@ -41,6 +42,7 @@
 #include "rgbdslam/model/slam_mode.h"
 #include "rgbdslam/tracking/depth_alignment.h"
 #include "rgbdslam/tracking/depth_integrity.h"
+#include "rgbdslam/tracking/photometric_integrity.h"
 #include "rgbdslam/tracking/feature_relocaliser.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/map_replica.h"
@@ -144,6 +146,7 @@ struct TrackerOptions {
   int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
+  PhotometricIntegrityOptions photometric;  // every pose against the image (every mode)
   DepthAlignmentOptions depth_align;  // depth where the points are too few (depth modes)
   FeatureRelocaliserOptions reloc_features;  // relocalisation from anywhere (depth modes)
   LocalMapOptions local_map;        // which keyframes keep their pyramid (map_replica.h)
