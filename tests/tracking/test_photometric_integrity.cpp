@@ -78,7 +78,6 @@ TEST_F(PhotometricCheck, TheTruePoseAgreesAPoseCentimetresOffDoesNot) {
   EXPECT_TRUE(right.consistent);
   EXPECT_GT(right.checked, 100);
   EXPECT_LT(right.mismatchRatio(), 0.05);
-  EXPECT_LT(right.median_score_ratio, 0.3);
   // The room's walls are 2-4 m away (f = 525 px): 2 cm sideways moves the patches 3-5 px,
   // half a degree of yaw 4.6 px; both are rejected where the pose puts them.
   const PhotometricIntegrity sideways = check(SE3(Mat3::Identity(), Vec3(0.02, 0, 0)) * T_c_w);
@@ -102,7 +101,9 @@ TEST_F(PhotometricCheck, NoVerdictOnTooFewPatchesOrWhenOff) {
   EXPECT_FALSE(few.judged);
   EXPECT_TRUE(few.consistent);
   options.enabled = false;
-  EXPECT_TRUE(checkPhotometricIntegrity(slots, off, pyramid, camera, search, options).consistent);
+  const PhotometricIntegrity off_check = checkPhotometricIntegrity(slots, off, pyramid, camera, search, options);
+  EXPECT_TRUE(off_check.consistent);
+  EXPECT_EQ(off_check.checked, 0) << "no work when off";
 }
 
 }  // namespace

@@ -23,10 +23,10 @@ PhotometricIntegrity checkPhotometricIntegrity(const std::vector<PointSlot*>& sl
                                                const PointSearchOptions& search,
                                                const PhotometricIntegrityOptions& options) {
   PhotometricIntegrity out;
+  if (!options.enabled) return out;
   int found = 0;
   for (const PointSlot* slot : slots) found += slot->found;
   const int step = std::max(1, found / std::max(1, options.max_samples));
-  std::vector<double> ratios;
   int index = 0;
   for (const PointSlot* slot : slots) {
     if (!slot->found || index++ % step != 0) continue;
@@ -39,14 +39,8 @@ PhotometricIntegrity checkPhotometricIntegrity(const std::vector<PointSlot*>& sl
     const double accepted = patchAcceptance(slot->patch, search);
     ++out.checked;
     if (score >= accepted) ++out.mismatched;
-    ratios.push_back(accepted > 0.0 ? score / accepted : 1.0);
   }
-  if (!ratios.empty()) {
-    auto mid = ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2);
-    std::nth_element(ratios.begin(), mid, ratios.end());
-    out.median_score_ratio = *mid;
-  }
-  out.judged = options.enabled && out.checked >= options.min_samples;
+  out.judged = out.checked >= options.min_samples;
   out.consistent = !out.judged || out.mismatchRatio() <= options.max_mismatch_ratio;
   return out;
 }

@@ -27,7 +27,6 @@ namespace {
 
 using TrackStatus = TrackResult::Status;
 
-// The result of tracking one frame from a start pose.
 // Both integrity checks of one pose; the reason names the checks that refused it.
 struct PoseIntegrity {
   PhotometricIntegrity image;
@@ -43,6 +42,7 @@ struct PoseIntegrity {
   }
 };
 
+// The result of tracking one frame from a start pose.
 struct Attempt {
   SE3 T_c_w;
   int searched = 0;

@@ -27,7 +27,7 @@ namespace rgbdslam {
 
 struct PhotometricIntegrityOptions {
   bool enabled = true;               // in every mode (it needs no depth)
-  int max_samples = 300;             // found patches checked per frame at most [patches]
+  int max_samples = 100;             // found patches checked per frame at most [patches]
   int min_samples = 20;              // fewer found patches: no verdict [patches]
   double max_mismatch_ratio = 0.5;   // more patches rejected where the pose puts them: inconsistent
 
@@ -37,7 +37,6 @@ struct PhotometricIntegrityOptions {
 struct PhotometricIntegrity {
   int checked = 0;     // found patches compared where the pose puts them
   int mismatched = 0;  // ...that the search would not accept there
-  double median_score_ratio = 0.0;  // ZMSSD at the projection / the acceptance, median
   bool judged = false;  // enough patches were checked for a verdict
   bool consistent = true;
   double mismatchRatio() const { return checked > 0 ? static_cast<double>(mismatched) / checked : 0.0; }
@@ -45,7 +44,7 @@ struct PhotometricIntegrity {
 };
 
 // 'slots': the stage's slots; those found (found, with a patch made at the level found)
-// are checked. 'pyramid': the current frame's.
+// are checked. 'pyramid': the current frame's. Nothing is checked when the option is off.
 PhotometricIntegrity checkPhotometricIntegrity(const std::vector<PointSlot*>& slots, const SE3& T_c_w,
                                                const ImagePyramid& pyramid, const PinholeCamera& camera,
                                                const PointSearchOptions& search,
