@@ -34,6 +34,8 @@ void CullOptions::bind(OptionRegistry* r, const std::string& s) {
           "source-only points survive while their keyframe is this recent");
   r->bind(s, "max_outlier_fraction", &max_outlier_fraction, 0.0, 1.0, "-",
           "points with a larger share of outlier measurements are culled");
+  r->bind(s, "max_point_depth_m", &max_depth_m, 1.0, 10000.0, "m",
+          "points carried farther than this from their source keyframe's camera (or behind it) by bundle adjustment are culled");
 }
 
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
@@ -75,6 +77,20 @@ CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2
   }
   result.removed_points.assign(removed.begin(), removed.end());
   return result;
+}
+
+std::vector<PointId> cullDivergedPoints(Map* map, const std::vector<PointId>& candidates, double max_depth_m) {
+  std::vector<PointId> removed;
+  for (PointId pid : candidates) {
+    const MapPoint* point = map->point(pid);
+    const Keyframe* source = point ? map->keyframe(point->source_keyframe) : nullptr;
+    if (!source) continue;
+    const double depth = (source->T_c_w() * point->p_w).z();
+    if (depth > 0.0 && depth <= max_depth_m) continue;
+    map->removePoint(pid);
+    removed.push_back(pid);
+  }
+  return removed;
 }
 
 }  // namespace rgbdslam

@@ -299,8 +299,17 @@ BaResult Mapper::Impl::runBa(const std::set<KeyframeId>& free_keyframes, const s
                                    fix_initial_points);
   BaResult result = adjuster_.solve(&ba.problem, interrupt);
   if (!usableResult(result)) return result;
-  if (writeBackBa(ba, &map_, &changes_.keyframes, &changes_.points) > 0) changed_in_call_ = true;
+  std::set<PointId> moved;
+  if (writeBackBa(ba, &map_, &changes_.keyframes, &moved) > 0) changed_in_call_ = true;
   applyBaOutliers(ba, result, &map_, &pending_outliers_);
+  // Points carried off go at once, before any publication can hold them (map_maintenance.h).
+  for (PointId pid : cullDivergedPoints(&map_, std::vector<PointId>(moved.begin(), moved.end()),
+                                        options_.cull.max_depth_m)) {
+    moved.erase(pid);
+    changes_.points.erase(pid);
+    changes_.removed_points.insert(pid);
+  }
+  changes_.points.insert(moved.begin(), moved.end());
   cull_needed_ = true;
   return result;
 }
