@@ -30,6 +30,7 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "JPEG quality of keyframe images");
   r->bind(s, "keyframe_depth", &keyframe_encoding.depth_step, {{"full", 1}, {"half", 2}, {"quarter", 4}},
           "keyframe depth on the link: every pixel, or every 2nd or 4th pixel and row (the centre of each block)");
+  link_budget.bind(r, s);
 }
 
 void MapperProcessOptions::bind(OptionRegistry* r) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/lcm_conversions.h"
+#include "common/link_budget.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
@@ -30,6 +31,7 @@ struct TrackerProcessOptions {
   double ack_wait_s = 10;        // [s]
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
+  LinkBudgetOptions link_budget;  // the best rung is keyframe_encoding (common/link_budget.h)
   void bind(OptionRegistry* registry);
 };
 

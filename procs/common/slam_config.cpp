@@ -39,6 +39,12 @@ Expected<SlamConfig> loadSlamConfig(const CommandLine& cli) {
   if (cli.has("mode")) {
     if (Status s = config.registry->set("slam.mode=" + cli.get("mode")); !s) return Error{"--mode: " + s.error()};
   }
+  // rgbd-tracker's --link-budget-kbps N, the and the README's name for the key.
+  if (cli.has("link-budget-kbps")) {
+    if (Status s = config.registry->set("tracker_node.link_budget_kbps=" + cli.get("link-budget-kbps")); !s) {
+      return Error{"--link-budget-kbps: " + s.error()};
+    }
+  }
   if (Status s = config.registry->validate(); !s) {
     return Error{(cli.has("config") ? cli.get("config") + " with --set/--mode: " : "") + s.error()};
   }

@@ -46,7 +46,8 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
                          TrackerNodeOptions options)
     : local_(local), link_(link), options_(std::move(options)),
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
-      sync_(map_id, options_.sync.outbox) {}
+      sync_(map_id, options_.sync.outbox), budget_(options_.process.link_budget),
+      ladder_(encodingLadder(options_.process.keyframe_encoding, options_.process.link_budget.min_jpeg_quality)) {}
 
 void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
   tracker_.load(map, !localise_only);
@@ -60,6 +61,8 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   while (!stop) {
     handleAvailable(kLoopTimeoutMs);
     const auto now = Clock::now();
+    budget_.refill(steadyUs(now));
+    sendWaiting(now);
     resendDue();
     if (elapsed(last_receipt_, now, options_.sync.receipt_period_s)) {
       last_receipt_ = now;
@@ -75,10 +78,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
-    if (sync_.outbox().empty() || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
+    if ((sync_.outbox().empty() && waiting_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
   publishStatus();
-  return sync_.outbox().empty() ? 0 : 1;
+  return sync_.outbox().empty() && waiting_.empty() ? 0 : 1;
 }
 
 // Handles everything that has arrived (map messages at once; frames into the backlog), then
@@ -146,24 +149,55 @@ void TrackerNode::trackFrame(const Received& received) {
 }
 
 void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
-  const rgbdslam::keyframe_t msg = toLcm(keyframe, options_.process.keyframe_encoding);
+  const auto now = Clock::now();
+  budget_.refill(steadyUs(now));
+  const int rung = ladderRung(budget_.fill(), static_cast<int>(ladder_.size()));
+  const rgbdslam::keyframe_t msg = toLcm(keyframe, ladder_[static_cast<size_t>(rung)]);
   std::vector<uint8_t> bytes(msg.getEncodedSize());
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  link_->publish(options_.channels.keyframe, bytes.data(), static_cast<unsigned>(bytes.size()));
   ++counters_.keyframes;
-  ++counters_.keyframe_sends;
-  counters_.keyframe_bytes += static_cast<long>(bytes.size());
-  const auto now = Clock::now();
+  counters_.keyframes_coarser += rung > 0;
+  counters_.last_rung = rung;
   created_[keyframe.id] = now;
-  sync_.send(keyframe.id, std::move(bytes), steadyUs(now));
+  const int max_waiting = options_.process.link_budget.max_waiting;
+  if (waiting_.empty() && (budget_.open() || max_waiting == 0)) {
+    counters_.keyframes_over_budget += !budget_.open();
+    publishKeyframe(keyframe.id, std::move(bytes), now);
+    return;
+  }
+  ++counters_.keyframes_waited;
+  waiting_.emplace_back(keyframe.id, std::move(bytes));
+  if (static_cast<int>(waiting_.size()) > max_waiting) {
+    ++counters_.keyframes_over_budget;
+    publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
+    waiting_.pop_front();
+  }
 }
 
-void TrackerNode::resendDue() {
-  for (const std::vector<uint8_t>* bytes : sync_.resendsDue(steadyUs(Clock::now()))) {
-    link_->publish(options_.channels.keyframe, bytes->data(), static_cast<unsigned>(bytes->size()));
-    ++counters_.keyframe_sends;
-    counters_.keyframe_bytes += static_cast<long>(bytes->size());
+void TrackerNode::publishKeyframe(KeyframeId id, std::vector<uint8_t> bytes, Clock::time_point now) {
+  publishKeyframeBytes(bytes);
+  sync_.send(id, std::move(bytes), steadyUs(now));
+}
+
+void TrackerNode::publishKeyframeBytes(const std::vector<uint8_t>& bytes) {
+  link_->publish(options_.channels.keyframe, bytes.data(), static_cast<unsigned>(bytes.size()));
+  budget_.spend(bytes.size());
+  ++counters_.keyframe_sends;
+  counters_.keyframe_bytes += static_cast<long>(bytes.size());
+}
+
+void TrackerNode::sendWaiting(Clock::time_point now) {
+  while (!waiting_.empty() && budget_.open()) {
+    publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
+    waiting_.pop_front();
   }
+}
+
+// Re-sends only while no new keyframe waits and the budget is open: a re-send that waits is
+// due again at the next call (KeyframeOutbox moves its time only when it is returned).
+void TrackerNode::resendDue() {
+  if (!waiting_.empty() || !budget_.open()) return;
+  for (const std::vector<uint8_t>* bytes : sync_.resendsDue(steadyUs(Clock::now()))) publishKeyframeBytes(*bytes);
 }
 
 void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
@@ -221,6 +255,7 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
 void TrackerNode::publishReceipt() {
   const rgbdslam::map_receipt_t msg = toLcm(sync_.receipt(utimeNow()));
   link_->publish(options_.channels.receipt, &msg);
+  budget_.spend(static_cast<size_t>(msg.getEncodedSize()));
 }
 
 void TrackerNode::publishStatus() {
@@ -239,6 +274,12 @@ void TrackerNode::publishStatus() {
                      {"keyframe_sends", c.keyframe_sends},
                      {"mapper_losses", sync_.mapperLosses()},
                      {"keyframe_bytes", c.keyframe_bytes},
+                     {"link_bytes", budget_.bytesSent()},
+                     {"keyframes_coarser", c.keyframes_coarser},
+                     {"keyframes_waited", c.keyframes_waited},
+                     {"keyframes_waiting", static_cast<int64_t>(waiting_.size())},
+                     {"keyframes_over_budget", c.keyframes_over_budget},
+                     {"keyframe_rung", c.last_rung},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
                      {"keyframes_hot", hotKeyframes(tracker_.map())},
                      {"frames", c.frames},
@@ -277,6 +318,7 @@ void TrackerNode::publishStatus() {
                        {"keyframe_in_map_ms_max", in_map_ms_.quantile(1.0)}};
   const rgbdslam::status_t msg = toLcm(status);
   link_->publish(options_.channels.tracker_status, &msg);
+  budget_.spend(static_cast<size_t>(msg.getEncodedSize()));
 }
 
 void TrackerNode::printSummary() const {
@@ -294,6 +336,10 @@ void TrackerNode::printSummary() const {
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
               c.keyframes, keyframesAcked(), sync_.outbox().size(), c.keyframe_sends, c.keyframe_bytes);
+  std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nkeyframes_coarser %ld\nkeyframes_waited %ld\nkeyframes_waiting %zu\n"
+              "keyframes_over_budget %ld\n",
+              options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()), c.keyframes_coarser,
+              c.keyframes_waited, waiting_.size(), c.keyframes_over_budget);
   std::printf("map_version_newest_seen %lld\nmapper_losses %ld\n", static_cast<long long>(sync_.follower().newestSeen()),
               sync_.mapperLosses());
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",

@@ -8,8 +8,10 @@
 //   by the backlog, while one slow frame, e.g. a keyframe's, costs no pose). SLAM_POSE for
 //   every tracked frame (its state says tracking / dodgy / lost / relocalised /
 //   initialising).
-//   SLAM_KEYFRAME (link): a new keyframe is encoded once and handed to TrackerSync, which
-//   keeps it and says when to re-send it until a map message acknowledges it.
+//   SLAM_KEYFRAME (link): a new keyframe is encoded once, at the rung of the encoding ladder
+//   the link budget allows (common/link_budget.h), and handed to TrackerSync when it goes out,
+//   which keeps it and says when to re-send it until a map message acknowledges it. While the
+//   budget is spent, new keyframes wait in line and re-sends wait.
 //   SLAM_MAP (link): TrackerSync takes the acknowledgements and says whether the content is
 //   applied to the replica.
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
@@ -25,6 +27,7 @@
 #include <string>
 
 #include "common/lcm_conversions.h"
+#include "common/link_budget.h"
 #include "common/loss_report.h"
 #include "common/process_options.h"
 #include "common/samples.h"
@@ -57,7 +60,9 @@ class TrackerNode {
   int run(const std::atomic<bool>& stop);
   void printSummary() const;
   // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
-  long keyframesAcked() const { return counters_.keyframes - static_cast<long>(sync_.outbox().size()); }
+  long keyframesAcked() const {
+    return counters_.keyframes - static_cast<long>(sync_.outbox().size() + waiting_.size());
+  }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -66,6 +71,9 @@ class TrackerNode {
   void trackFrame(const Received& received);
   void onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   void sendKeyframe(const KeyframeData& keyframe);
+  void publishKeyframe(KeyframeId id, std::vector<uint8_t> bytes, Clock::time_point now);  // first send
+  void publishKeyframeBytes(const std::vector<uint8_t>& bytes);  // any send: link, budget, counters
+  void sendWaiting(Clock::time_point now);
   void resendDue();
   void publishReceipt();
   void publishStatus();
@@ -79,6 +87,9 @@ class TrackerNode {
 
   TrackerSync<std::vector<uint8_t>> sync_;  // the encoded keyframe_t of each unacknowledged keyframe
   std::map<KeyframeId, Clock::time_point> created_;  // keyframes not yet in an applied map
+  LinkBudget budget_;
+  std::vector<KeyframeEncoding> ladder_;  // keyframe encodings, best first
+  std::deque<std::pair<KeyframeId, std::vector<uint8_t>>> waiting_;  // encoded, not yet sent
   struct Received {
     std::vector<uint8_t> bytes;
     int64_t recv_utime = 0;  // when LCM received it [us]
@@ -95,7 +106,11 @@ class TrackerNode {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
          bad_map_messages = 0, keyframes = 0, keyframe_sends = 0, inconsistent = 0, depth_aided = 0,
          maps_received = 0, maps_applied = 0, maps_stale = 0, maps_foreign = 0,
-         maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0;
+         maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0,
+         keyframes_coarser = 0,     // sent below the best rung of the ladder
+         keyframes_waited = 0,      // waited for the budget before their first send
+         keyframes_over_budget = 0; // sent over budget: the line of waiting ones was full
+    int last_rung = 0;
   };
   Counters counters_;
   LossReport loss_;  // logs losing tracking and relocalising, one line each
