@@ -62,6 +62,7 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
     handleAvailable(kLoopTimeoutMs);
     const auto now = Clock::now();
     budget_.refill(steadyUs(now));
+    sendEncoded(now);
     sendWaiting(now);
     resendDue();
     if (elapsed(last_receipt_, now, options_.sync.receipt_period_s)) {
@@ -78,10 +79,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
-    if ((sync_.outbox().empty() && waiting_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
+    if ((sync_.outbox().empty() && waiting_.empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
   publishStatus();
-  return sync_.outbox().empty() && waiting_.empty() ? 0 : 1;
+  return sync_.outbox().empty() && waiting_.empty() && encoding_.empty() ? 0 : 1;
 }
 
 // Handles everything that has arrived (map messages at once; frames into the backlog), then
@@ -145,32 +146,55 @@ void TrackerNode::trackFrame(const Received& received) {
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
-  if (result.new_keyframe) sendKeyframe(*result.new_keyframe);
+  if (result.new_keyframe) sendKeyframe(std::move(*result.new_keyframe));
 }
 
-void TrackerNode::sendKeyframe(const KeyframeData& keyframe) {
+// The rung is chosen now, from the bucket as it is; the encoding (JPEG, zlib, LCM: a few ms)
+// runs on the encoder thread, and sendEncoded() sends it when it is done, in creation order.
+void TrackerNode::sendKeyframe(KeyframeData keyframe) {
   const auto now = Clock::now();
   budget_.refill(steadyUs(now));
   const int rung = ladderRung(budget_.fill(), static_cast<int>(ladder_.size()));
-  const rgbdslam::keyframe_t msg = toLcm(keyframe, ladder_[static_cast<size_t>(rung)]);
-  std::vector<uint8_t> bytes(msg.getEncodedSize());
-  msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   ++counters_.keyframes;
   counters_.keyframes_coarser += rung > 0;
   counters_.last_rung = rung;
   created_[keyframe.id] = now;
+  const KeyframeId id = keyframe.id;
+  const KeyframeEncoding encoding = ladder_[static_cast<size_t>(rung)];
+  encoding_.push_back({id, encoder_.submit([keyframe = std::move(keyframe), encoding]() {
+                         const auto start = Clock::now();
+                         const rgbdslam::keyframe_t msg = toLcm(keyframe, encoding);
+                         Encoded encoded;
+                         encoded.bytes.resize(static_cast<size_t>(msg.getEncodedSize()));
+                         msg.encode(encoded.bytes.data(), 0, static_cast<int>(encoded.bytes.size()));
+                         encoded.ms = msBetween(start, Clock::now());
+                         return encoded;
+                       })});
+}
+
+// Keyframes whose encoding is done, oldest first: sent at once, or in line for the budget
+// (link_budget.h).
+void TrackerNode::sendEncoded(Clock::time_point now) {
   const int max_waiting = options_.process.link_budget.max_waiting;
-  if (waiting_.empty() && (budget_.open() || max_waiting == 0)) {
-    counters_.keyframes_over_budget += !budget_.open();
-    publishKeyframe(keyframe.id, std::move(bytes), now);
-    return;
-  }
-  ++counters_.keyframes_waited;
-  waiting_.emplace_back(keyframe.id, std::move(bytes));
-  if (static_cast<int>(waiting_.size()) > max_waiting) {
-    ++counters_.keyframes_over_budget;
-    publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
-    waiting_.pop_front();
+  while (!encoding_.empty() &&
+         encoding_.front().encoded.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    const KeyframeId id = encoding_.front().id;
+    Encoded encoded = encoding_.front().encoded.get();
+    encoding_.pop_front();
+    encode_ms_.add(encoded.ms);
+    std::vector<uint8_t> bytes = std::move(encoded.bytes);
+    if (waiting_.empty() && (budget_.open() || max_waiting == 0)) {
+      counters_.keyframes_over_budget += !budget_.open();
+      publishKeyframe(id, std::move(bytes), now);
+      continue;
+    }
+    ++counters_.keyframes_waited;
+    waiting_.emplace_back(id, std::move(bytes));
+    if (static_cast<int>(waiting_.size()) > max_waiting) {
+      ++counters_.keyframes_over_budget;
+      publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
+      waiting_.pop_front();
+    }
   }
 }
 
@@ -278,6 +302,7 @@ void TrackerNode::publishStatus() {
                      {"keyframes_coarser", c.keyframes_coarser},
                      {"keyframes_waited", c.keyframes_waited},
                      {"keyframes_waiting", static_cast<int64_t>(waiting_.size())},
+                     {"keyframes_encoding", static_cast<int64_t>(encoding_.size())},
                      {"keyframes_over_budget", c.keyframes_over_budget},
                      {"keyframe_rung", c.last_rung},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
@@ -312,6 +337,8 @@ void TrackerNode::publishStatus() {
                        {"arrival_ms_median", arrival_ms_.quantile(0.5)},
                        {"frame_ms_median", frame_ms_.quantile(0.5)},
                        {"frame_ms_p99", frame_ms_.quantile(0.99)},
+                       {"keyframe_encode_ms_median", encode_ms_.quantile(0.5)},
+                       {"keyframe_encode_ms_max", encode_ms_.quantile(1.0)},
                        {"keyframe_ack_ms_median", ack_ms_.quantile(0.5)},
                        {"keyframe_ack_ms_max", ack_ms_.quantile(1.0)},
                        {"keyframe_in_map_ms_median", in_map_ms_.quantile(0.5)},
@@ -349,6 +376,8 @@ void TrackerNode::printSummary() const {
               frame_ms_.quantile(0.5), frame_ms_.quantile(0.99));
   std::printf("track_ms_median %.3f\ntrack_ms_p99 %.3f\nlatency_ms_median %.3f\nlatency_ms_p99 %.3f\n",
               track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
+  std::printf("keyframe_encode_ms_median %.2f\nkeyframe_encode_ms_max %.2f\n", encode_ms_.quantile(0.5),
+              encode_ms_.quantile(1.0));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",
               ack_ms_.quantile(0.5), ack_ms_.quantile(1.0), in_map_ms_.quantile(0.5), in_map_ms_.quantile(1.0));
   printPeakRss();

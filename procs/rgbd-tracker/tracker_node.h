@@ -1,7 +1,7 @@
 #pragma once
 // rgbd-tracker's node: the onboard tracker, converting messages for the tracker's end of the
 // map protocol (lib sync/tracker_sync.h, docs/design.md "Map protocol").
-// One thread, so the tracker needs no locks and a pose leaves as soon as it is computed:
+// One thread for tracking and LCM, so the tracker needs no locks and a pose leaves as soon as it is computed:
 //   RGBD_FRAME (local bus): frames are tracked in order from a backlog of at most
 //   max_backlog_frames; when a newer frame arrives at a full backlog the oldest is skipped
 //   and counted (a real-time tracker must not fall behind the camera: latency stays bounded
@@ -9,7 +9,9 @@
 //   every tracked frame (its state says tracking / dodgy / lost / relocalised /
 //   initialising).
 //   SLAM_KEYFRAME (link): a new keyframe is encoded once, at the rung of the encoding ladder
-//   the link budget allows (common/link_budget.h), and handed to TrackerSync when it goes out,
+//   the link budget allows (common/link_budget.h), on a second thread (the encoder: JPEG,
+//   zlib and LCM encoding leave the frame path, issue 10 item 6; this thread publishes it
+//   when it is done, in creation order), and handed to TrackerSync when it goes out,
 //   which keeps it and says when to re-send it until a map message acknowledges it. While the
 //   budget is spent, new keyframes wait in line and re-sends wait.
 //   SLAM_MAP (link): TrackerSync takes the acknowledgements and says whether the content is
@@ -28,6 +30,7 @@
 
 #include "common/lcm_conversions.h"
 #include "common/link_budget.h"
+#include "rgbdslam/util/background_worker.h"
 #include "common/loss_report.h"
 #include "common/process_options.h"
 #include "common/samples.h"
@@ -61,7 +64,7 @@ class TrackerNode {
   void printSummary() const;
   // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
   long keyframesAcked() const {
-    return counters_.keyframes - static_cast<long>(sync_.outbox().size() + waiting_.size());
+    return counters_.keyframes - static_cast<long>(sync_.outbox().size() + waiting_.size() + encoding_.size());
   }
 
  private:
@@ -70,7 +73,8 @@ class TrackerNode {
   struct Received;
   void trackFrame(const Received& received);
   void onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel);
-  void sendKeyframe(const KeyframeData& keyframe);
+  void sendKeyframe(KeyframeData keyframe);
+  void sendEncoded(Clock::time_point now);
   void publishKeyframe(KeyframeId id, std::vector<uint8_t> bytes, Clock::time_point now);  // first send
   void publishKeyframeBytes(const std::vector<uint8_t>& bytes);  // any send: link, budget, counters
   void sendWaiting(Clock::time_point now);
@@ -90,6 +94,16 @@ class TrackerNode {
   LinkBudget budget_;
   std::vector<KeyframeEncoding> ladder_;  // keyframe encodings, best first
   std::deque<std::pair<KeyframeId, std::vector<uint8_t>>> waiting_;  // encoded, not yet sent
+  struct Encoded {
+    std::vector<uint8_t> bytes;  // the keyframe_t message
+    double ms = 0;               // time on the encoder thread [ms]
+  };
+  struct Encoding {
+    KeyframeId id;
+    std::shared_future<Encoded> encoded;
+  };
+  std::deque<Encoding> encoding_;  // keyframes on the encoder thread, oldest first
+  BackgroundWorker encoder_;       // its jobs own their keyframe and encoding; they touch no member
   struct Received {
     std::vector<uint8_t> bytes;
     int64_t recv_utime = 0;  // when LCM received it [us]
@@ -101,6 +115,7 @@ class TrackerNode {
   // receipt: capture's encoding and LCM's transfer) + frame time (receipt to publication:
   // the tracker's own time per frame: backlog, decoding, tracking, publishing).
   RecentSamples track_ms_, latency_ms_, arrival_ms_, frame_ms_, ack_ms_, in_map_ms_;
+  RecentSamples encode_ms_;  // a keyframe's encoding on the encoder thread, off the frame path
 
   struct Counters {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
