@@ -8,7 +8,7 @@ namespace rgbdslam {
 void LinkBudgetOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "link_budget_kbps", &kbps, 0.0, 1e6, "kbit/s",
           "the tracker's average rate on the link (keyframes, re-sends, receipts, status) at most: "
-          "keyframes get coarser (lower JPEG quality), re-sends wait, nothing is dropped (0: no budget; also --link-budget-kbps)");
+          "keyframes get coarser (lower JPEG quality) as it is spent, nothing is dropped or delayed (0: no budget; also --link-budget-kbps)");
   r->bind(s, "link_burst_s", &burst_s, 0.1, 60.0, "s", "the link absorbs a burst of this many seconds of the budget");
   r->bind(s, "keyframe_min_jpeg_quality", &min_jpeg_quality, 1, 100, "",
           "the lowest JPEG quality the budget may choose for a keyframe");
@@ -30,7 +30,7 @@ void LinkBudget::refill(int64_t now_us) {
 
 void LinkBudget::spend(size_t bytes) {
   bytes_sent_ += static_cast<int64_t>(bytes);
-  if (limited()) tokens_ -= static_cast<double>(bytes);
+  if (limited()) tokens_ = std::max(-capacity_bytes_, tokens_ - static_cast<double>(bytes));
 }
 
 double LinkBudget::fill() const { return limited() ? tokens_ / capacity_bytes_ : 1.0; }
@@ -42,9 +42,9 @@ std::vector<KeyframeEncoding> encodingLadder(const KeyframeEncoding& best, int m
     rung.depth_step = 4;
     ladder.push_back(rung);
   }
-  if (!rung.jpeg_grey) {  // lossless PNG: JPEG at 90 is the first lossy rung
+  if (!rung.jpeg_grey) {  // lossless PNG: JPEG at 90 (or the floor, if higher) is the first lossy rung
     rung.jpeg_grey = true;
-    rung.jpeg_quality = 90;
+    rung.jpeg_quality = std::max(90, min_jpeg_quality);
     ladder.push_back(rung);
   }
   while (rung.jpeg_quality > min_jpeg_quality) {

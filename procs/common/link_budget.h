@@ -2,24 +2,31 @@
 // The tracker's share of the radio link (rgbd-tracker --link-budget-kbps N): a token bucket
 // over everything the tracker sends on the link (keyframes, their re-sends, receipts, status).
 // Why a bucket: a radio link carries a rate on average and absorbs a short burst (its own
-// queue); the bucket holds link_burst_s seconds of the budget, refills at the budget's rate
-// and may go below zero by the one message that overdrew it (a message is never split).
+// queue); the bucket holds link_burst_s seconds of the budget and refills at the budget's
+// rate. Messages that must go although it is empty (below) put it in debt, down to minus its
+// capacity at most: the debt is what makes the following keyframes coarser, and the floor
+// lets the quality come back within two bursts' time once the load falls.
 //
-// Keyframes keep within it in two ways, and are never dropped:
+// What the budget does, and does not do:
 //   - Quality: each keyframe is encoded once, at a rung of a ladder of encodings chosen by
 //     how full the bucket is: the configured encoding while it is at least half full, then
 //     coarser depth (every 4th pixel and row), then JPEG quality in steps of 15 down to
-//     keyframe_min_jpeg_quality, the last rung when the bucket is empty. The tracker itself
-//     tracks against its own full-quality copy; the mapper's measurements in this keyframe
-//     (refinding, epipolar search) use what was sent.
-//   - Waiting (off by default): with link_max_waiting_keyframes > 0, a keyframe that finds
-//     the bucket empty waits in line (oldest first) until it refills, and re-sends wait
-//     while any keyframe waits; when more wait than the line holds, the oldest goes over
-//     budget. This makes the cap hard, but the mapper then integrates keyframes seconds late:
-//     on the full corridor (6.7 keyframes per metre at 1 m/s) the tracker was lost for good
-//     at frame 1516 of 3300 with a line of 16 (bench-suite, 2026-11-25). So by default a new
-//     keyframe always goes at once, at the last rung if the bucket is empty (counted as over
-//     budget), and only re-sends wait for the budget.
+//     keyframe_min_jpeg_quality, the last rung when the bucket is empty or in debt. The
+//     tracker itself tracks against its own full-quality copy; the mapper's measurements in
+//     this keyframe (refinding, epipolar search) use what was sent.
+//   - Re-sends, receipts and status are never held back (they count): the mapper takes
+//     keyframes strictly in order, so a re-send held while new keyframes keep the bucket
+//     empty would stall the map for as long; the outbox's back-off (1, 2, 4 s) bounds them.
+//   - Waiting (off by default): with link_max_waiting_keyframes > 0, a new keyframe that
+//     finds the bucket empty waits in line (oldest first) until it refills; when more wait
+//     than the line holds, the oldest goes over budget. This caps the keyframe rate, but the
+//     mapper then integrates keyframes seconds late: on the full corridor (6.7 keyframes per
+//     metre at 1 m/s) that ended at ATE 1.61 m, or lost for good at frame 1516 of 3300 with
+//     JPEG 75 kept, with a line of 16 (bench-suite, 2026-11-25). So by default a new keyframe
+//     goes at once, at the last rung if the bucket is empty (counted as over budget).
+// So the budget is a target the keyframes' quality follows, not a hard cap: when even the
+// last rung is more than the budget at the rate keyframes are made, the rate is exceeded and
+// keyframes_over_budget says by how many keyframes.
 // Units: rates in kbit/s (1000 bit/s), bytes of LCM payload; time in microseconds from the
 // caller's monotonic clock.
 #include <cstddef>
@@ -48,7 +55,7 @@ class LinkBudget {
   // True when a message may go now: no budget, or the bucket is not empty.
   bool open() const { return !limited() || tokens_ > 0; }
   void spend(size_t bytes);
-  // Bucket level / capacity: 1 full, 0 empty, below 0 overdrawn (no budget: 1).
+  // Bucket level / capacity: 1 full, 0 empty, down to -1 in debt (no budget: 1).
   double fill() const;
   int64_t bytesSent() const { return bytes_sent_; }
 

@@ -12,6 +12,7 @@ namespace rgbdslam {
 namespace {
 
 constexpr int kLoopTimeoutMs = 20;  // [ms] longest wait for a message between timer checks
+constexpr int kEncodingPollMs = 1;  // [ms] the same while a keyframe is being encoded (1-5 ms)
 constexpr int kMaxHandlePerLoop = 64;  // messages handled before tracking the newest frame
 
 double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -59,7 +60,7 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   auto maps = subscribeRaw(link_, options_.channels.map, this, &TrackerNode::onMap);
   Clock::time_point finishing_since{};  // when the frames stopped; epoch: they have not
   while (!stop) {
-    handleAvailable(kLoopTimeoutMs);
+    handleAvailable(encoding_.empty() ? kLoopTimeoutMs : kEncodingPollMs);
     const auto now = Clock::now();
     budget_.refill(steadyUs(now));
     sendEncoded(now);
@@ -183,6 +184,7 @@ void TrackerNode::sendEncoded(Clock::time_point now) {
     encoding_.pop_front();
     encode_ms_.add(encoded.ms);
     std::vector<uint8_t> bytes = std::move(encoded.bytes);
+    sendWaiting(now);
     if (waiting_.empty() && (budget_.open() || max_waiting == 0)) {
       counters_.keyframes_over_budget += !budget_.open();
       publishKeyframe(id, std::move(bytes), now);
@@ -191,7 +193,7 @@ void TrackerNode::sendEncoded(Clock::time_point now) {
     ++counters_.keyframes_waited;
     waiting_.emplace_back(id, std::move(bytes));
     if (static_cast<int>(waiting_.size()) > max_waiting) {
-      ++counters_.keyframes_over_budget;
+      counters_.keyframes_over_budget += !budget_.open();
       publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
       waiting_.pop_front();
     }
@@ -217,10 +219,8 @@ void TrackerNode::sendWaiting(Clock::time_point now) {
   }
 }
 
-// Re-sends only while no new keyframe waits and the budget is open: a re-send that waits is
-// due again at the next call (KeyframeOutbox moves its time only when it is returned).
+// Re-sends are never held back by the budget (link_budget.h); they count against it.
 void TrackerNode::resendDue() {
-  if (!waiting_.empty() || !budget_.open()) return;
   for (const std::vector<uint8_t>* bytes : sync_.resendsDue(steadyUs(Clock::now()))) publishKeyframeBytes(*bytes);
 }
 
@@ -294,7 +294,7 @@ void TrackerNode::publishStatus() {
                      {"map_version_newest_seen", sync_.follower().newestSeen()},
                      {"keyframes", c.keyframes},
                      {"keyframes_acked", keyframesAcked()},
-                     {"keyframes_unacked", static_cast<int64_t>(sync_.outbox().size())},
+                     {"keyframes_unacked", static_cast<int64_t>(keyframesUnacked())},
                      {"keyframe_sends", c.keyframe_sends},
                      {"mapper_losses", sync_.mapperLosses()},
                      {"keyframe_bytes", c.keyframe_bytes},
@@ -362,7 +362,7 @@ void TrackerNode::printSummary() const {
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
-              c.keyframes, keyframesAcked(), sync_.outbox().size(), c.keyframe_sends, c.keyframe_bytes);
+              c.keyframes, keyframesAcked(), keyframesUnacked(), c.keyframe_sends, c.keyframe_bytes);
   std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nkeyframes_coarser %ld\nkeyframes_waited %ld\nkeyframes_waiting %zu\n"
               "keyframes_over_budget %ld\n",
               options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()), c.keyframes_coarser,

@@ -11,9 +11,10 @@
 //   SLAM_KEYFRAME (link): a new keyframe is encoded once, at the rung of the encoding ladder
 //   the link budget allows (common/link_budget.h), on a second thread (the encoder: JPEG,
 //   zlib and LCM encoding leave the frame path, issue 10 item 6; this thread publishes it
-//   when it is done, in creation order), and handed to TrackerSync when it goes out,
-//   which keeps it and says when to re-send it until a map message acknowledges it. While the
-//   budget is spent, new keyframes wait in line and re-sends wait.
+//   when it is done, in creation order, polling every 1 ms meanwhile), and handed to
+//   TrackerSync when it goes out, which keeps it and says when to re-send it until a map
+//   message acknowledges it. Only with link_max_waiting_keyframes > 0 does a new keyframe
+//   wait for the budget.
 //   SLAM_MAP (link): TrackerSync takes the acknowledgements and says whether the content is
 //   applied to the replica.
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
@@ -63,9 +64,9 @@ class TrackerNode {
   int run(const std::atomic<bool>& stop);
   void printSummary() const;
   // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
-  long keyframesAcked() const {
-    return counters_.keyframes - static_cast<long>(sync_.outbox().size() + waiting_.size() + encoding_.size());
-  }
+  long keyframesAcked() const { return counters_.keyframes - static_cast<long>(keyframesUnacked()); }
+  // Sent and not yet acknowledged, waiting for the budget, or being encoded.
+  size_t keyframesUnacked() const { return sync_.outbox().size() + waiting_.size() + encoding_.size(); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -124,7 +125,7 @@ class TrackerNode {
          maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0,
          keyframes_coarser = 0,     // sent below the best rung of the ladder
          keyframes_waited = 0,      // waited for the budget before their first send
-         keyframes_over_budget = 0; // sent over budget: the line of waiting ones was full
+         keyframes_over_budget = 0; // sent while the bucket was empty (link_budget.h)
     int last_rung = 0;
   };
   Counters counters_;

@@ -6,7 +6,9 @@
 # (keyframes, receipts, status, measured in the link's log) stays within the budget over the
 # log's duration plus the bucket's burst (2 s) plus, for each keyframe it had to send over
 # budget (counted by the tracker), one keyframe of the unbudgeted run. The ATE stays within
-# 2x of the unbudgeted run's (as test_suite_split bounds a lossy link).
+# 2x of the unbudgeted run's (as test_suite_split bounds a lossy link). The budget is a target
+# that the keyframes' quality follows, not a hard cap (common/link_budget.h): the bound checks
+# the tracker's accounting and that it sends less, not that the room fits in 300 kbit/s.
 source "$(dirname "$0")/common.sh"
 source "$(dirname "$0")/link.sh"
 source "$(dirname "$0")/split.sh"

@@ -66,6 +66,19 @@ TEST(LinkBudget, TheBucketRefillsAtTheRateUpToItsBurst) {
   EXPECT_NEAR(budget.fill(), 1.0, 1e-9);
 }
 
+TEST(LinkBudget, DebtStopsAtTheCapacitySoQualityComesBack) {
+  LinkBudgetOptions options;
+  options.kbps = 800;  // 100 kB/s
+  options.burst_s = 1;
+  LinkBudget budget(options);
+  budget.refill(0);
+  for (int i = 0; i < 100; ++i) budget.spend(100000);  // 10 MB forced through
+  EXPECT_DOUBLE_EQ(budget.fill(), -1.0);
+  EXPECT_EQ(budget.bytesSent(), 10000000);
+  budget.refill(2 * kSecondUs + 1);  // two bursts' time pays the deepest debt
+  EXPECT_TRUE(budget.open());
+}
+
 TEST(EncodingLadder, RungsFollowTheBucket) {
   EXPECT_EQ(ladderRung(1.0, 4), 0);
   EXPECT_EQ(ladderRung(0.5, 4), 0);
@@ -88,6 +101,9 @@ TEST(EncodingLadder, StartsAtTheConfiguredEncodingAndEndsAtTheLowestQuality) {
   ASSERT_EQ(from_default.size(), 4u);  // 75, 60, 45, 30
   EXPECT_EQ(from_default[1].jpeg_quality, 60);
   EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 4}, 30).size(), 1u);  // already below the floor
+  const auto high_floor = encodingLadder(KeyframeEncoding{false, 90, 4}, 95);  // PNG, then JPEG 95 only
+  ASSERT_EQ(high_floor.size(), 2u);
+  EXPECT_EQ(high_floor[1].jpeg_quality, 95);
 }
 
 TEST(EncodingLadder, EachRungOfARenderedKeyframeIsSmallerAndDecodes) {
