@@ -12,9 +12,6 @@ void LinkBudgetOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "link_burst_s", &burst_s, 0.1, 60.0, "s", "the link absorbs a burst of this many seconds of the budget");
   r->bind(s, "keyframe_min_jpeg_quality", &min_jpeg_quality, 1, 100, "",
           "the lowest JPEG quality the budget may choose for a keyframe");
-  r->bind(s, "link_max_waiting_keyframes", &max_waiting, 0, 1000, "keyframes",
-          "new keyframes that find the budget spent wait in line, at most this many (beyond, the oldest goes "
-          "over budget); 0: none wait, a keyframe goes at once at the lowest quality and counts as over budget");
 }
 
 LinkBudget::LinkBudget(const LinkBudgetOptions& options)

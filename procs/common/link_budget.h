@@ -17,13 +17,11 @@
 //   - Re-sends, receipts and status are never held back (they count): the mapper takes
 //     keyframes strictly in order, so a re-send held while new keyframes keep the bucket
 //     empty would stall the map for as long; the outbox's back-off (1, 2, 4 s) bounds them.
-//   - Waiting (off by default): with link_max_waiting_keyframes > 0, a new keyframe that
-//     finds the bucket empty waits in line (oldest first) until it refills; when more wait
-//     than the line holds, the oldest goes over budget. This caps the keyframe rate, but the
-//     mapper then integrates keyframes seconds late: on the full corridor (6.7 keyframes per
-//     metre at 1 m/s) that ended at ATE 1.61 m, or lost for good at frame 1516 of 3300 with
-//     JPEG 75 kept, with a line of 16 (bench-suite, 2026-11-25). So by default a new keyframe
-//     goes at once, at the last rung if the bucket is empty (counted as over budget).
+//   - New keyframes never wait for the bucket either: one that reaches the mapper seconds
+//     late costs more than its bytes save. A waiting line (removed 2026-11-25) ended the full
+//     corridor (6.7 keyframes per metre at 1 m/s) at ATE 1.61 m, or lost for good at frame 1516
+//     of 3300 with JPEG 75 kept, with a line of 16 (bench-suite). So a new keyframe goes at
+//     once, at the last rung if the bucket is empty (counted as over budget).
 // So the budget is a target the keyframes' quality follows, not a hard cap: when even the
 // last rung is more than the budget at the rate keyframes are made, the rate is exceeded and
 // keyframes_over_budget says by how many keyframes.
@@ -42,7 +40,6 @@ struct LinkBudgetOptions {
   double kbps = 1000;           // the tracker's average rate on the link at most (0: none) [kbit/s]
   double burst_s = 2.0;         // the bucket holds this many seconds of the budget [s]
   int min_jpeg_quality = 30;    // the ladder's last rung [1, 100]
-  int max_waiting = 0;          // keyframes waiting for the bucket at most (0: none wait) [keyframes]
   void bind(OptionRegistry* registry, const std::string& section);
 };
 

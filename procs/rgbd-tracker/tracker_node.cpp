@@ -64,7 +64,6 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
     const auto now = Clock::now();
     budget_.refill(steadyUs(now));
     sendEncoded(now);
-    sendWaiting(now);
     resendDue();
     if (elapsed(last_receipt_, now, options_.sync.receipt_period_s)) {
       last_receipt_ = now;
@@ -80,10 +79,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
-    if ((sync_.outbox().empty() && waiting_.empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
+    if ((sync_.outbox().empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
   publishStatus();
-  return sync_.outbox().empty() && waiting_.empty() && encoding_.empty() ? 0 : 1;
+  return sync_.outbox().empty() && encoding_.empty() ? 0 : 1;
 }
 
 // Handles everything that has arrived (map messages at once; frames into the backlog), then
@@ -173,30 +172,17 @@ void TrackerNode::sendKeyframe(KeyframeData keyframe) {
                        })});
 }
 
-// Keyframes whose encoding is done, oldest first: sent at once, or in line for the budget
-// (link_budget.h).
+// Keyframes whose encoding is done, oldest first: sent at once, whatever the budget's fill
+// (link_budget.h: the budget chose their rung; a keyframe late at the mapper costs more).
 void TrackerNode::sendEncoded(Clock::time_point now) {
-  const int max_waiting = options_.process.link_budget.max_waiting;
   while (!encoding_.empty() &&
          encoding_.front().encoded.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     const KeyframeId id = encoding_.front().id;
     Encoded encoded = encoding_.front().encoded.get();
     encoding_.pop_front();
     encode_ms_.add(encoded.ms);
-    std::vector<uint8_t> bytes = std::move(encoded.bytes);
-    sendWaiting(now);
-    if (waiting_.empty() && (budget_.open() || max_waiting == 0)) {
-      counters_.keyframes_over_budget += !budget_.open();
-      publishKeyframe(id, std::move(bytes), now);
-      continue;
-    }
-    ++counters_.keyframes_waited;
-    waiting_.emplace_back(id, std::move(bytes));
-    if (static_cast<int>(waiting_.size()) > max_waiting) {
-      counters_.keyframes_over_budget += !budget_.open();
-      publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
-      waiting_.pop_front();
-    }
+    counters_.keyframes_over_budget += !budget_.open();
+    publishKeyframe(id, std::move(encoded.bytes), now);
   }
 }
 
@@ -210,13 +196,6 @@ void TrackerNode::publishKeyframeBytes(const std::vector<uint8_t>& bytes) {
   budget_.spend(bytes.size());
   ++counters_.keyframe_sends;
   counters_.keyframe_bytes += static_cast<long>(bytes.size());
-}
-
-void TrackerNode::sendWaiting(Clock::time_point now) {
-  while (!waiting_.empty() && budget_.open()) {
-    publishKeyframe(waiting_.front().first, std::move(waiting_.front().second), now);
-    waiting_.pop_front();
-  }
 }
 
 // Re-sends are never held back by the budget (link_budget.h); they count against it.
@@ -300,8 +279,6 @@ void TrackerNode::publishStatus() {
                      {"keyframe_bytes", c.keyframe_bytes},
                      {"link_bytes", budget_.bytesSent()},
                      {"keyframes_coarser", c.keyframes_coarser},
-                     {"keyframes_waited", c.keyframes_waited},
-                     {"keyframes_waiting", static_cast<int64_t>(waiting_.size())},
                      {"keyframes_encoding", static_cast<int64_t>(encoding_.size())},
                      {"keyframes_over_budget", c.keyframes_over_budget},
                      {"keyframe_rung", c.last_rung},
@@ -363,10 +340,10 @@ void TrackerNode::printSummary() const {
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
               c.keyframes, keyframesAcked(), keyframesUnacked(), c.keyframe_sends, c.keyframe_bytes);
-  std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nkeyframes_coarser %ld\nkeyframes_waited %ld\nkeyframes_waiting %zu\n"
+  std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nkeyframes_coarser %ld\n"
               "keyframes_over_budget %ld\n",
               options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()), c.keyframes_coarser,
-              c.keyframes_waited, waiting_.size(), c.keyframes_over_budget);
+              c.keyframes_over_budget);
   std::printf("map_version_newest_seen %lld\nmapper_losses %ld\n", static_cast<long long>(sync_.follower().newestSeen()),
               sync_.mapperLosses());
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",

@@ -13,8 +13,7 @@
 //   zlib and LCM encoding leave the frame path, issue 10 item 6; this thread publishes it
 //   when it is done, in creation order, polling every 1 ms meanwhile), and handed to
 //   TrackerSync when it goes out, which keeps it and says when to re-send it until a map
-//   message acknowledges it. Only with link_max_waiting_keyframes > 0 does a new keyframe
-//   wait for the budget.
+//   message acknowledges it. No keyframe waits for the budget.
 //   SLAM_MAP (link): TrackerSync takes the acknowledgements and says whether the content is
 //   applied to the replica.
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
@@ -66,7 +65,7 @@ class TrackerNode {
   // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
   long keyframesAcked() const { return counters_.keyframes - static_cast<long>(keyframesUnacked()); }
   // Sent and not yet acknowledged, waiting for the budget, or being encoded.
-  size_t keyframesUnacked() const { return sync_.outbox().size() + waiting_.size() + encoding_.size(); }
+  size_t keyframesUnacked() const { return sync_.outbox().size() + encoding_.size(); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -78,7 +77,6 @@ class TrackerNode {
   void sendEncoded(Clock::time_point now);
   void publishKeyframe(KeyframeId id, std::vector<uint8_t> bytes, Clock::time_point now);  // first send
   void publishKeyframeBytes(const std::vector<uint8_t>& bytes);  // any send: link, budget, counters
-  void sendWaiting(Clock::time_point now);
   void resendDue();
   void publishReceipt();
   void publishStatus();
@@ -94,7 +92,6 @@ class TrackerNode {
   std::map<KeyframeId, Clock::time_point> created_;  // keyframes not yet in an applied map
   LinkBudget budget_;
   std::vector<KeyframeEncoding> ladder_;  // keyframe encodings, best first
-  std::deque<std::pair<KeyframeId, std::vector<uint8_t>>> waiting_;  // encoded, not yet sent
   struct Encoded {
     std::vector<uint8_t> bytes;  // the keyframe_t message
     double ms = 0;               // time on the encoder thread [ms]
@@ -124,7 +121,6 @@ class TrackerNode {
          maps_received = 0, maps_applied = 0, maps_stale = 0, maps_foreign = 0,
          maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0,
          keyframes_coarser = 0,     // sent below the best rung of the ladder
-         keyframes_waited = 0,      // waited for the budget before their first send
          keyframes_over_budget = 0; // sent while the bucket was empty (link_budget.h)
     int last_rung = 0;
   };
