@@ -437,6 +437,8 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
   msg.num_moved = static_cast<int32_t>(msg.moved.size());
   msg.removed_points = update.removed_points;
   msg.num_removed = static_cast<int32_t>(msg.removed_points.size());
+  msg.removed_keyframes = update.removed_keyframes;
+  msg.num_removed_keyframes = static_cast<int32_t>(msg.removed_keyframes.size());
   return msg;
 }
 
@@ -447,7 +449,8 @@ Status checkMapHeader(const rgbdslam::map_t& msg) {
                    checkCount(msg.num_keyframes, msg.keyframes.size(), "num_keyframes"),
                    checkCount(msg.num_points, msg.points.size(), "num_points"),
                    checkCount(msg.num_moved, msg.moved.size(), "num_moved"),
-                   checkCount(msg.num_removed, msg.removed_points.size(), "num_removed")}) {
+                   checkCount(msg.num_removed, msg.removed_points.size(), "num_removed"),
+                   checkCount(msg.num_removed_keyframes, msg.removed_keyframes.size(), "num_removed_keyframes")}) {
     if (!s) return s;
   }
   if (msg.version < 0) return Error{"negative version"};
@@ -456,6 +459,9 @@ Status checkMapHeader(const rgbdslam::map_t& msg) {
   }
   for (int64_t id : msg.removed_points) {
     if (Status s = checkId(id, "removed point"); !s) return s;
+  }
+  for (int64_t id : msg.removed_keyframes) {
+    if (Status s = checkId(id, "removed keyframe"); !s) return s;
   }
   return Status{};
 }
@@ -497,6 +503,7 @@ Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg) {
   update.acked_keyframes = msg.acked_keyframes;
   if (Status s = decodeMapContents(msg, &update); !s) return Error{what + s.error()};
   update.removed_points = msg.removed_points;
+  update.removed_keyframes = msg.removed_keyframes;
   return update;
 }
 

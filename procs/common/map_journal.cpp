@@ -14,6 +14,7 @@ namespace {
 constexpr uint8_t kMagic[3] = {'M', 'J', '1'};
 constexpr uint8_t kKeyframeRecord = 1;
 constexpr uint8_t kVersionRecord = 2;
+constexpr uint8_t kCulledRecord = 3;
 constexpr size_t kHeaderSize = 12;                   // magic 3 + type 1 + length 4 + crc 4
 constexpr uint32_t kMaxRecordBytes = 256u << 20;     // larger claimed lengths are corrupt
 
@@ -87,6 +88,12 @@ Expected<MapJournal> MapJournal::open(const std::string& dir, Contents* contents
       int64_t version = 0;
       std::memcpy(&version, payload, 8);
       contents->last_version = version;
+    } else if (record[3] == kCulledRecord && length % 8 == 0) {
+      for (size_t i = 0; i < length; i += 8) {
+        int64_t id = 0;
+        std::memcpy(&id, payload + i, 8);
+        contents->culled.push_back(id);
+      }
     } else {
       break;
     }
@@ -139,6 +146,11 @@ Status MapJournal::appendKeyframe(const void* data, size_t size) {
 
 Status MapJournal::appendVersion(int64_t version) {
   return append(kVersionRecord, &version, sizeof version);
+}
+
+Status MapJournal::appendCulled(const std::vector<KeyframeId>& ids) {
+  static_assert(sizeof(KeyframeId) == 8, "journal records hold 64-bit ids");
+  return append(kCulledRecord, ids.data(), ids.size() * sizeof(KeyframeId));
 }
 
 Status MapJournal::append(uint8_t type, const void* data, size_t size) {

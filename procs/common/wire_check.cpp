@@ -130,6 +130,7 @@ Status checkWire(const rgbdslam::map_t*, const void* data, size_t size) {
   r.array(r.count("num_points", kMaxMapPoints), kMapPointBytes, "points");
   r.array(r.count("num_moved", kMaxMapPoints), kPointPositionBytes, "moved");
   r.array(r.count("num_removed", kMaxMapPoints), 8, "removed_points");
+  r.array(r.count("num_removed_keyframes", kMaxMapKeyframes), 8, "removed_keyframes");
   return r.finish();
 }
 

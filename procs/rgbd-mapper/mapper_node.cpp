@@ -61,14 +61,14 @@ Status MapperNode::restore(const LoadedMap* start_map, int64_t map_id) {
   }
   // No refinement here: the restored map is published at once (a snapshot), and the worker
   // refines it afterwards like any other (a tracker waits for it meanwhile).
-  if (Status s = sync_->restore(journaled, contents.last_version); !s) {
+  if (Status s = sync_->restore(journaled, contents.last_version, contents.culled); !s) {
     const bool continues_a_file = !start_map && !journaled.empty() && journaled.front().keyframe.id > 0;
     return Error{journal_->path() + ": " + s.error() +
                  (continues_a_file ? " (if this map started from a file: restart with the same --load-map and --map-id)" : "")};
   }
   if (!journaled.empty()) {
     std::cerr << "rgbd-mapper: restored map " << sync_->mapId() << " from " << journal_->path() << ": "
-              << journaled.size() << " keyframes, " << mapper_.map().numPoints()
+              << journaled.size() << " keyframes (" << contents.culled.size() << " culled since), " << mapper_.map().numPoints()
               << " points; publishing from version " << sync_->version() + 1 << "\n";
   }
   return Status{};
@@ -175,6 +175,7 @@ void MapperNode::publishStatus() {
   status.counters = {{"map_id", sync_->mapId()},
                      {"map_version", sync_->version()},
                      {"keyframes", static_cast<int64_t>(mapper_.map().numKeyframes())},
+                     {"keyframes_culled", mapper_.keyframesCulled()},
                      {"points", static_cast<int64_t>(mapper_.map().numPoints())},
                      {"keyframes_received", received_.load()},
                      {"keyframes_integrated", c.integrated},
@@ -224,7 +225,8 @@ void MapperNode::flushOutbox() {
 void MapperNode::printSummary() const {
   const MapperSync::Counters c = sync_->counters();
   std::cerr << "rgbd-mapper: map " << sync_->mapId() << " version " << sync_->version() << ": "
-            << mapper_.map().numKeyframes() << " keyframes (" << c.restored << " restored), "
+            << mapper_.map().numKeyframes() << " keyframes (" << c.restored << " restored, "
+            << mapper_.keyframesCulled() << " culled), "
             << mapper_.map().numPoints() << " points; received " << received_ << ", duplicates "
             << c.duplicates << ", out of order " << c.out_of_order << ", foreign map " << c.foreign
             << ", bad messages " << bad_messages_ << ", bad keyframes " << c.refused << "; "
@@ -238,6 +240,7 @@ void MapperNode::printSummary() const {
   const LoopClosureCounters& loops = mapper_.loopClosures();  // the worker has stopped
   std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
               loops.recognised, loops.closed, loops.refused);
+  std::printf("keyframes_in_map %zu\nkeyframes_culled %ld\n", mapper_.map().numKeyframes(), mapper_.keyframesCulled());
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries
   std::fflush(stdout);
 }

@@ -268,6 +268,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   const LoopClosureCounters& loops = slam_->mapper().loopClosures();  // the mapper has finished
   std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
               loops.recognised, loops.closed, loops.refused);
+  std::printf("keyframes_culled %ld\nkeyframes_in_map %zu\n", slam_->mapper().keyframesCulled(),
+              slam_->mapper().map().numKeyframes());
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printMapFileSummary();
   printPeakRss();

@@ -110,16 +110,17 @@ split_restart_mapper() {
 }
 
 # split_mapper_summary DIR: the mapper's last summary line (printed at SIGINT) as key-value
-# lines: mapper_map, mapper_version, mapper_keyframes, mapper_restored, mapper_points,
+# lines: mapper_map, mapper_version, mapper_keyframes (in the map), mapper_culled (keyframes
+# culled as redundant since the mapper started, its journal's included), mapper_restored, mapper_points,
 # mapper_received, mapper_duplicates, mapper_out_of_order, mapper_foreign, mapper_bad_messages,
 # mapper_bad_keyframes, mapper_maps_published, mapper_snapshots.
 split_mapper_summary() {
   grep '^rgbd-mapper: map ' "$1/mapper.err" | tail -1 | sed -E \
-    's/^rgbd-mapper: map ([0-9]+) version ([0-9]+): ([0-9]+) keyframes \(([0-9]+) restored\), ([0-9]+) points; received ([0-9]+), duplicates ([0-9]+), out of order ([0-9]+), foreign map ([0-9]+), bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_map \1\nmapper_version \2\nmapper_keyframes \3\nmapper_restored \4\nmapper_points \5\nmapper_received \6\nmapper_duplicates \7\nmapper_out_of_order \8\nmapper_foreign \9/;t more;d;:more' \
+    's/^rgbd-mapper: map ([0-9]+) version ([0-9]+): ([0-9]+) keyframes \(([0-9]+) restored, [0-9]+ culled\), ([0-9]+) points; received ([0-9]+), duplicates ([0-9]+), out of order ([0-9]+), foreign map ([0-9]+), bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_map \1\nmapper_version \2\nmapper_keyframes \3\nmapper_restored \4\nmapper_points \5\nmapper_received \6\nmapper_duplicates \7\nmapper_out_of_order \8\nmapper_foreign \9/;t more;d;:more' \
     || true
   # sed has nine back-references at most: the rest from a second pass.
   grep '^rgbd-mapper: map ' "$1/mapper.err" | tail -1 | sed -E \
-    's/.*, bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_bad_messages \1\nmapper_bad_keyframes \2\nmapper_maps_published \3\nmapper_snapshots \4/;t;d' \
+    's/.* keyframes \([0-9]+ restored, ([0-9]+) culled\).*, bad messages ([0-9]+), bad keyframes ([0-9]+); ([0-9]+) maps published \(([0-9]+) snapshots.*/mapper_culled \1\nmapper_bad_messages \2\nmapper_bad_keyframes \3\nmapper_maps_published \4\nmapper_snapshots \5/;t;d' \
     || true
 }
 

@@ -60,7 +60,8 @@ grep -q 'corrupt record' "$dir/mapper.err" || fail "the mapper did not report th
 [ "$(split_value mapper_losses "$t")" -ge 1 ] || fail "the tracker did not notice the mapper's loss"
 [ "$(split_value keyframes_unacked "$t")" = 0 ] || fail "keyframes left unacknowledged: $(tr '\n' ' ' < "$t")"
 [ "$(cat "$dir/tracker.exit")" = 0 ] || fail "the tracker exited with $(cat "$dir/tracker.exit")"
-[ "$(split_value mapper_keyframes "$m")" = "$kfs" ] || fail "the mapper holds $(split_value mapper_keyframes "$m") of $kfs keyframes"
+[ $(($(split_value mapper_keyframes "$m") + $(split_value mapper_culled "$m"))) = "$kfs" ] \
+  || fail "the mapper holds $(split_value mapper_keyframes "$m") and culled $(split_value mapper_culled "$m") of $kfs keyframes"
 [ "${skipped:-x}" = 0 ] || fail "the mapper skipped ${skipped:-?} keyframes the tracker still held"
 [ "${caught_up:-0}" -ge 1 ] || fail "the mapper's versions did not catch up with the tracker's"
 [ "$(split_value map_version "$t")" = "$(split_value map_version_newest_seen "$t")" ] \

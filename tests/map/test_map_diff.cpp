@@ -99,6 +99,30 @@ TEST(MapDiffer, AnnouncesEveryRemovalAndSkipsPointsAddedAndRemovedSincePublished
   EXPECT_EQ(delta.removed_points[0], 7);
 }
 
+// A keyframe culled: listed as removed; a point it described, re-described by another
+// keyframe, goes in full again (the tracker needs the new patch), not as a move.
+TEST(MapDiffer, SendsCulledKeyframesAndReDescribedPointsInFull) {
+  Map map = makeMap();
+  MapDiffer differ;
+  differ.snapshot(map);
+  map.point(2)->source_keyframe = 1;
+  map.point(2)->source_uv = Eigen::Vector2d(7, 8);
+  map.removeKeyframe(0);
+  MapChanges changes;
+  changes.points = {2};
+  changes.removed_keyframes = {0};
+  const MapUpdate delta = differ.delta(map, changes);
+  ASSERT_EQ(delta.points.size(), 1u);
+  EXPECT_EQ(delta.points[0].source_keyframe, 1);
+  EXPECT_EQ(delta.points[0].uv, Eigen::Vector2d(7, 8));
+  EXPECT_TRUE(delta.moved_points.empty());
+  EXPECT_EQ(delta.removed_keyframes, (std::vector<KeyframeId>{0}));
+  const MapUpdate snapshot = differ.snapshot(map);
+  ASSERT_EQ(snapshot.keyframes.size(), 1u) << "a snapshot holds the keyframes that are left";
+  EXPECT_EQ(snapshot.keyframes[0].id, 1);
+  EXPECT_EQ(snapshot.removed_keyframes, (std::vector<KeyframeId>{0})) << "every keyframe culled so far";
+}
+
 TEST(MapChanges, MergeKeepsTheLaterOfAnAdditionAndARemoval) {
   MapChanges a, b;
   a.points = {1, 2};
@@ -112,6 +136,13 @@ TEST(MapChanges, MergeKeepsTheLaterOfAnAdditionAndARemoval) {
   a.merge(c);
   EXPECT_TRUE(a.points.count(2));
   EXPECT_FALSE(a.removed_points.count(2));
+  MapChanges d;
+  d.removed_keyframes = {4};
+  a.keyframes = {4, 5};
+  a.merge(d);
+  EXPECT_EQ(a.keyframes, (std::set<KeyframeId>{5})) << "a culled keyframe's pose is not sent";
+  EXPECT_EQ(a.removed_keyframes, (std::set<KeyframeId>{4}));
+  EXPECT_FALSE(d.empty());
 }
 
 }  // namespace

@@ -109,6 +109,21 @@ TEST(PlaceRecognition, LeavesOutExcludedKeyframes) {
   for (const PlaceCandidate& c : listed) EXPECT_NE(c.keyframe, best);
 }
 
+// A keyframe culled from the map is never a candidate again.
+TEST(PlaceRecognition, RemovedKeyframesAreNoCandidates) {
+  PlaceDatabase db(placeRoom().camera(), PlaceRecognitionOptions{});
+  addPlaceRoom(&db, false);
+  const PlaceMatch first = db.recognise(placeQuery().features, PlaceExclusion{}, std::nullopt);
+  ASSERT_TRUE(first.recognised()) << describePlaceMatch(first);
+  const size_t size = db.size();
+  EXPECT_TRUE(db.remove(first.best.keyframe));
+  EXPECT_FALSE(db.remove(100000));
+  EXPECT_EQ(db.size(), size);
+  for (const PlaceCandidate& c : db.query(placeQuery().features, PlaceExclusion{})) EXPECT_NE(c.keyframe, first.best.keyframe);
+  const PlaceMatch second = db.recognise(placeQuery().features, PlaceExclusion{}, std::nullopt);
+  EXPECT_NE(second.best.keyframe, first.best.keyframe);
+}
+
 // Another place is not verified: the corridor, and the room with other paint (seed 2: the
 // same geometry, other textures) seen from the query's own pose, where a geometric test
 // alone would fit perfectly.

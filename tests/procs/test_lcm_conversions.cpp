@@ -135,6 +135,7 @@ TEST(LcmConversions, MapRoundTrip) {
   EXPECT_TRUE(back->is_snapshot);
   EXPECT_EQ(back->acked_keyframes, update.acked_keyframes);
   EXPECT_EQ(back->removed_points, update.removed_points);
+  EXPECT_EQ(back->removed_keyframes, update.removed_keyframes);
   ASSERT_EQ(back->points.size(), 1u);
   EXPECT_EQ(back->points[0].uv, Eigen::Vector2d(100, 200));
   ASSERT_EQ(back->moved_points.size(), 1u);

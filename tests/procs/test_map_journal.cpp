@@ -28,13 +28,16 @@ TEST(MapJournal, ReloadsKeyframesAndTheLastVersion) {
     ASSERT_TRUE(journal->appendKeyframe(a.data(), a.size()));
     ASSERT_TRUE(journal->appendVersion(7));
     ASSERT_TRUE(journal->appendKeyframe(b.data(), b.size()));
+    ASSERT_TRUE(journal->appendCulled({4, 6}));
     ASSERT_TRUE(journal->appendVersion(9));
+    ASSERT_TRUE(journal->appendCulled({8}));
   }
   auto again = MapJournal::open(dir.path(), &contents);
   ASSERT_TRUE(again) << again.error();
   ASSERT_EQ(contents.keyframes.size(), 2u);
   EXPECT_EQ(std::string(contents.keyframes[1].begin(), contents.keyframes[1].end()), "second");
   EXPECT_EQ(contents.last_version, 9);
+  EXPECT_EQ(contents.culled, (std::vector<KeyframeId>{4, 6, 8}));
   EXPECT_TRUE(contents.warning.empty());
 }
 

@@ -85,6 +85,9 @@ TEST(MessageRanges, CountsMustMatchTheArrays) {
   rgbdslam::map_t map = toLcm(test::sampleMapUpdate());
   map.num_removed = -1;
   expectRejected(map, "num_removed");
+  map = toLcm(test::sampleMapUpdate());
+  map.num_removed_keyframes = 2;
+  expectRejected(map, "num_removed_keyframes");
 }
 
 TEST(MessageRanges, MapContentsAreChecked) {
@@ -103,6 +106,9 @@ TEST(MessageRanges, MapContentsAreChecked) {
   msg = toLcm(test::sampleMapUpdate());
   msg.removed_points[0] = -1;
   expectRejected(msg, "negative id");
+  msg = toLcm(test::sampleMapUpdate());
+  msg.removed_keyframes[0] = -3;
+  expectRejected(msg, "removed keyframe");
 }
 
 TEST(MessageRanges, PoseCarriesItsMapAndIsChecked) {

@@ -62,8 +62,12 @@ TEST(WireCheck, MapWithHugeAcknowledgementCountIsRejected) {
   update.acked_keyframes.clear();
   update.removed_points = {1, 2, 3};
   bytes = test::encode(toLcm(update));
-  putBigEndian32(bytes, bytes.size() - 3 * 8 - 4, 1 << 28);  // num_removed
+  putBigEndian32(bytes, bytes.size() - 4 - 3 * 8 - 4, 1 << 28);  // num_removed (then no removed keyframes)
   expectRejected<rgbdslam::map_t>(bytes, "num_removed");
+  update.removed_keyframes = {4, 5};
+  bytes = test::encode(toLcm(update));
+  putBigEndian32(bytes, bytes.size() - 2 * 8 - 4, 1 << 28);  // num_removed_keyframes
+  expectRejected<rgbdslam::map_t>(bytes, "num_removed_keyframes");
 }
 
 // Counts within the limits but beyond the bytes present: nothing is allocated.

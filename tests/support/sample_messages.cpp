@@ -47,6 +47,7 @@ MapUpdate sampleMapUpdate() {
   update.points.push_back({5, Vec3(0.5, 0.25, 3), 1, Eigen::Vector2d(100, 200), 0});
   update.moved_points.push_back({6, Vec3(100.0, -2.5, 1.25)});
   update.removed_points = {9, 10};
+  update.removed_keyframes = {1};
   return update;
 }
 

@@ -29,8 +29,13 @@ class MemoryJournal : public KeyframeJournal {
     last_version = v;
     return Status{};
   }
+  Status appendCulled(const std::vector<KeyframeId>& ids) override {
+    culled.insert(culled.end(), ids.begin(), ids.end());
+    return Status{};
+  }
   std::vector<IncomingKeyframe> keyframes;
   int64_t last_version = 0;
+  std::vector<KeyframeId> culled;
 };
 
 PinholeCamera smallCamera() {
@@ -42,7 +47,7 @@ PinholeCamera smallCamera() {
 
 // Keyframe k: 0.1 m further along x, with ten points from depth 2 m ahead (provisional ids)
 // and its measurements of the previous keyframe's points.
-KeyframeData makeKeyframe(const PinholeCamera& camera, KeyframeId k) {
+KeyframeData makeKeyframe(const PinholeCamera& camera, KeyframeId k, bool see_keyframe_one = false) {
   KeyframeData kf;
   kf.utime = k * kS;
   kf.map_id = kMapId;
@@ -61,6 +66,16 @@ KeyframeData makeKeyframe(const PinholeCamera& camera, KeyframeId k) {
     kf.new_points.push_back(p);
     kf.measurements.push_back(Measurement{p.id, uv, 0, 2.0});
   }
+  if (!see_keyframe_one || k < 2) return kf;
+  // Keyframe 1's points, seen again: keyframe 1 becomes redundant (map_maintenance.h).
+  const SE3 T_one(Mat3::Identity(), Vec3(0.1, 0, 0));
+  for (int i = 0; i < 10; ++i) {
+    const Vec3 p_w = T_one * camera.unproject(Eigen::Vector2d(20.0 + 12.0 * i, 30.0 + 6.0 * i), 2.0);
+    const Vec3 p_c = kf.T_w_c.inverse() * p_w;
+    if (const auto uv = camera.project(p_c)) {
+      kf.measurements.push_back(Measurement{provisionalPointId(1, i), *uv, 0, p_c.z()});
+    }
+  }
   return kf;
 }
 
@@ -71,14 +86,18 @@ KeyframeOutboxOptions retaining(int retained) {
 }
 
 struct Rig {
-  explicit Rig(const LinkOptions& up_link, const LinkOptions& down_link, int retained = 64)
+  explicit Rig(const LinkOptions& up_link, const LinkOptions& down_link, int retained = 64,
+               bool see_keyframe_one = false)
       : camera(smallCamera()), replica(camera), tracker(kMapId, retaining(retained)),
-        up(up_link), down(down_link), receipts(up_link) {
+        up(up_link), down(down_link), receipts(up_link), see_keyframe_one(see_keyframe_one) {
     startMapper();
   }
 
   void startMapper() {
-    mapper = std::make_unique<Mapper>(camera, MapperOptions{}, SlamMode::kDepthBa);
+    MapperOptions mapper_options;
+    mapper_options.cull.keyframe_cull_min_points = 0;  // these keyframes measure 10-20 points
+    mapper_options.cull.keyframe_cull_min_age = 2;
+    mapper = std::make_unique<Mapper>(camera, mapper_options, SlamMode::kDepthBa);
     MapperSyncOptions options;
     options.publisher.map_period_s = 0.5;
     sync = std::make_unique<MapperSync>(mapper.get(), options, &journal);
@@ -87,7 +106,7 @@ struct Rig {
   // A mapper process killed and started again on the same journal.
   void restartMapper() {
     startMapper();
-    ASSERT_TRUE(sync->restore(journal.keyframes, journal.last_version));
+    ASSERT_TRUE(sync->restore(journal.keyframes, journal.last_version, journal.culled));
   }
 
   // ...on a journal cut short by a corrupt record: only the first 'keep' keyframes and the
@@ -101,7 +120,7 @@ struct Rig {
 
   void createKeyframe() {
     const KeyframeId k = next_keyframe++;
-    KeyframeData kf = makeKeyframe(camera, k);
+    KeyframeData kf = makeKeyframe(camera, k, see_keyframe_one);
     replica.addKeyframe(rgbdslam::makeKeyframe(kf, KeyframeBuildOptions{}));
     for (size_t i = 0; i < kf.new_points.size(); ++i) {
       NewPoint np;
@@ -158,7 +177,8 @@ struct Rig {
   // thresholds (1 mm, 0.5 mrad), the same points.
   void expectConsistent() const {
     const Map& truth = mapper->map();
-    ASSERT_EQ(truth.numKeyframes(), static_cast<size_t>(next_keyframe));
+    ASSERT_EQ(truth.numKeyframes() + static_cast<size_t>(mapper->keyframesCulled()), static_cast<size_t>(next_keyframe));
+    ASSERT_EQ(replica.map().numKeyframes(), truth.numKeyframes()) << "culled keyframes leave the replica too";
     for (const auto& [id, kf] : truth.keyframes()) {
       const Keyframe* mine = replica.map().keyframe(id);
       ASSERT_NE(mine, nullptr) << id;
@@ -189,6 +209,7 @@ struct Rig {
   MemoryJournal journal;
   std::unique_ptr<Mapper> mapper;
   std::unique_ptr<MapperSync> sync;
+  bool see_keyframe_one = false;
   int64_t now = 0;
   KeyframeId next_keyframe = 0;
   std::vector<int64_t> published;
@@ -249,6 +270,30 @@ TEST(SyncProtocol, MapperRestartFromItsJournalLosesNothingAndVersionsGoOn) {
   rig.expectConsistent();
   EXPECT_GT(rig.published.back(), version_before);
   EXPECT_EQ(rig.verdicts[MapVerdict::kStale], 0) << "a restarted mapper never re-uses a version";
+}
+
+// Keyframe culling over the link: the tracker's replica loses the culled keyframe with the
+// mapper's, the points it described come re-described, and a restarted mapper repeats the
+// culls of its journal (else its snapshots would name a keyframe the tracker removed).
+TEST(SyncProtocol, CulledKeyframesLeaveTheReplicaAndStayCulledAcrossARestart) {
+  Rig rig(link(0.1, 50, 5), link(0.1, 50, 6), 64, /*see_keyframe_one=*/true);
+  rig.fly(6, 0.5);
+  ASSERT_TRUE(rig.settle(20));
+  ASSERT_GE(rig.mapper->keyframesCulled(), 1);
+  EXPECT_FALSE(rig.mapper->map().hasKeyframe(1));
+  ASSERT_FALSE(rig.journal.culled.empty());
+  EXPECT_EQ(rig.journal.culled.front(), 1);
+  rig.expectConsistent();
+  for (int i = 0; i < 10; ++i) {
+    const MapPoint* p = rig.replica.map().point(provisionalPointId(1, i));
+    ASSERT_NE(p, nullptr);
+    EXPECT_NE(p->source_keyframe, 1);
+  }
+  rig.restartMapper();
+  EXPECT_FALSE(rig.mapper->map().hasKeyframe(1));
+  rig.fly(4, 0.5);
+  ASSERT_TRUE(rig.settle(20));
+  rig.expectConsistent();
 }
 
 // Issue 13: a corrupt journal record cut the journal short, acknowledged keyframes were lost,

@@ -98,5 +98,59 @@ TEST_F(LocalMap, FreezingIsBoundedPerCall) {
   EXPECT_EQ(replica->hotKeyframes(), 2);
 }
 
+// The mapper culled keyframe 1 (a delta names it): point 101, which it described, comes
+// re-described by keyframe 2 and keeps a slot; the keyframe and its measurements go.
+TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
+  MapUpdate acked;
+  acked.version = 1;
+  acked.acked_keyframes = {0, 1, 2};
+  ASSERT_TRUE(replica->apply(acked));
+  replica->addProvisionalPoint(2, NewPoint{MapPoint(MapPointData{300, Vec3(1, 0, 2), 1, {300, 200}, 0}),
+                                           Measurement{300, {300, 200}, 0, 2.0}});  // the mapper never had it
+  MapUpdate delta;
+  delta.version = 2;
+  delta.points.push_back(MapPointData{101, Vec3(1, 0, 2), 2, Eigen::Vector2d(250, 240), 1});
+  delta.removed_keyframes = {1};
+  EXPECT_TRUE(replica->apply(delta));
+  EXPECT_FALSE(replica->map().hasKeyframe(1));
+  ASSERT_NE(replica->map().point(101), nullptr);
+  EXPECT_EQ(replica->map().point(101)->source_keyframe, 2);
+  EXPECT_EQ(replica->map().point(300), nullptr) << "still described by the culled keyframe";
+  std::vector<PointId> slots;
+  for (const PointSlot& slot : replica->slots()) {
+    slots.push_back(slot.point->id);
+    EXPECT_NE(slot.source->id, 1);
+  }
+  std::sort(slots.begin(), slots.end());
+  EXPECT_EQ(slots, (std::vector<PointId>{100, 101, 102}));
+  // Keyframe 0 and keyframes not acknowledged are never culled: a message naming them is
+  // refused for them (a hostile or corrupt one; the mapper never sends it).
+  replica->addKeyframe(makeKeyframe(KeyframeData{0, 0, 3, SE3(), originals[0], {}, 5000.0, {}, {}},
+                                    KeyframeBuildOptions{}));
+  MapUpdate hostile;
+  hostile.version = 3;
+  hostile.removed_keyframes = {0, 3};
+  EXPECT_FALSE(replica->apply(hostile));
+  EXPECT_TRUE(replica->map().hasKeyframe(0));
+  EXPECT_TRUE(replica->map().hasKeyframe(3));
+  // A snapshot lists every keyframe culled so far (the delta naming keyframe 2 was lost); an
+  // acknowledged keyframe merely absent from it stays (a mapper that lost its journal).
+  MapUpdate snapshot;
+  snapshot.version = 5;
+  snapshot.is_snapshot = true;
+  snapshot.acked_keyframes = {0, 1, 2};
+  snapshot.keyframes = {{0, keyframe(0).T_w_c}};
+  snapshot.points.push_back(MapPointData{100, Vec3(0, 0, 2), 0, Eigen::Vector2d(320, 240), 0});
+  snapshot.removed_keyframes = {1, 2};
+  EXPECT_TRUE(replica->apply(snapshot));
+  EXPECT_EQ(replica->map().numKeyframes(), 2u) << "keyframes 0 and 3 (not yet acknowledged)";
+  EXPECT_EQ(replica->map().numPoints(), 1u);
+  EXPECT_EQ(replica->slots().size(), 1u);
+  LocalMap::SetUp();
+  snapshot.removed_keyframes.clear();
+  EXPECT_TRUE(replica->apply(snapshot));
+  EXPECT_EQ(replica->map().numKeyframes(), 3u) << "keyframes absent from a snapshot but not culled stay";
+}
+
 }  // namespace
 }  // namespace rgbdslam

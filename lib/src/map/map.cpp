@@ -63,6 +63,20 @@ Keyframe* Map::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
   return raw;
 }
 
+void Map::removeKeyframe(KeyframeId id) {
+  const auto it = keyframes_.find(id);
+  if (it == keyframes_.end()) return;
+  for (const auto& [point_id, m] : it->second->measurements_) {
+    const auto obs = observers_.find(point_id);
+    if (obs == observers_.end()) continue;
+    std::vector<KeyframeId>& ids = obs->second;
+    ids.erase(std::remove(ids.begin(), ids.end(), id), ids.end());
+    if (ids.empty()) observers_.erase(obs);
+  }
+  keyframes_.erase(it);
+  removed_keyframes_.insert(id);
+}
+
 Keyframe* Map::keyframe(KeyframeId id) {
   const auto it = keyframes_.find(id);
   return it == keyframes_.end() ? nullptr : it->second.get();

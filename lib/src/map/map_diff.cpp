@@ -5,7 +5,9 @@
 namespace rgbdslam {
 
 void MapChanges::merge(const MapChanges& later) {
+  for (KeyframeId id : later.removed_keyframes) keyframes.erase(id);
   keyframes.insert(later.keyframes.begin(), later.keyframes.end());
+  removed_keyframes.insert(later.removed_keyframes.begin(), later.removed_keyframes.end());
   for (PointId id : later.removed_points) points.erase(id);
   for (PointId id : later.points) removed_points.erase(id);
   points.insert(later.points.begin(), later.points.end());
@@ -30,12 +32,12 @@ MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes) {
     const MapPoint* point = map.point(id);
     if (!point) continue;  // added and removed again since: in neither list
     auto it = points_.find(id);
-    if (it == points_.end()) {
-      update.points.push_back(point->data());
-      points_[id] = point->p_w;
-    } else if ((point->p_w - it->second).norm() > options_.point_move_m) {
+    if (it == points_.end() || it->second.source != point->source_keyframe) {
+      update.points.push_back(point->data());  // new, or re-described (a new patch)
+      points_[id] = {point->p_w, point->source_keyframe};
+    } else if ((point->p_w - it->second.p_w).norm() > options_.point_move_m) {
       update.moved_points.push_back({id, point->p_w});
-      it->second = point->p_w;
+      it->second.p_w = point->p_w;
     }
   }
   // Every removal, published or not: the tracker may hold a point that was never published
@@ -43,6 +45,10 @@ MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes) {
   for (PointId id : changes.removed_points) {
     points_.erase(id);
     update.removed_points.push_back(id);
+  }
+  for (KeyframeId id : changes.removed_keyframes) {
+    keyframes_.erase(id);
+    update.removed_keyframes.push_back(id);
   }
   return update;
 }
@@ -54,6 +60,9 @@ MapUpdate MapDiffer::snapshot(const Map& map) {
   for (const auto& [id, kf] : map.keyframes()) everything.keyframes.insert(id);
   for (const auto& [id, point] : map.points()) everything.points.insert(id);
   MapUpdate update = delta(map, everything);
+  // Every keyframe culled so far: a tracker that missed the delta naming one still holds it,
+  // and a keyframe merely absent (lost with a mapper's journal, to be sent again) must stay.
+  update.removed_keyframes.assign(map.removedKeyframes().begin(), map.removedKeyframes().end());
   update.is_snapshot = true;
   return update;
 }

@@ -130,6 +130,15 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
   return result;
 }
 
+void LoopCloser::onKeyframeRemoved(KeyframeId id) {
+  if (places_) places_->remove(id);
+  pending_.erase(std::remove_if(pending_.begin(), pending_.end(), [id](const Pending& p) { return p.id == id; }),
+                 pending_.end());
+  loops_.erase(std::remove_if(loops_.begin(), loops_.end(),
+                              [id](const PoseGraphEdge& e) { return e.from == id || e.to == id; }),
+               loops_.end());
+}
+
 // Odometry edges between consecutive keyframes at their current relative poses, with sigmas
 // for the drift a step may carry; the loop edges accepted before, and 'loop' last.
 PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) const {

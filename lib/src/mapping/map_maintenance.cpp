@@ -25,6 +25,46 @@ std::set<KeyframeId> newestKeyframes(const Map& map, int count) {
   return newest;
 }
 
+// How many keyframes other than 'self' measure the point at 'level' or finer.
+int observersAtOrBelow(const Map& map, PointId pid, KeyframeId self, int level) {
+  int count = 0;
+  for (KeyframeId id : map.observers(pid)) {
+    if (id == self) continue;
+    const auto& measurements = map.keyframe(id)->measurements();
+    const auto it = measurements.find(pid);
+    if (it != measurements.end() && it->second.level <= level) ++count;
+  }
+  return count;
+}
+
+bool redundant(const Map& map, const Keyframe& kf, const CullOptions& options) {
+  const size_t total = kf.measurements().size();
+  if (total == 0 || static_cast<int>(total) < options.keyframe_cull_min_points) return false;
+  size_t seen_elsewhere = 0;
+  for (const auto& [pid, m] : kf.measurements()) {
+    if (observersAtOrBelow(map, pid, kf.id, m.level) >= options.keyframe_redundant_observers) ++seen_elsewhere;
+  }
+  return static_cast<double>(seen_elsewhere) >= options.keyframe_redundancy * static_cast<double>(total);
+}
+
+// The keyframe that describes the point once 'removed' is gone: the finest measurement,
+// then the camera nearest the removed one; never keyframe 0 (see the header). -1: none.
+KeyframeId newSource(const Map& map, PointId pid, const Keyframe& removed) {
+  KeyframeId best = -1;
+  int best_level = 0;
+  double best_distance = 0.0;
+  for (KeyframeId id : map.observers(pid)) {
+    if (id == removed.id || id == 0) continue;
+    const Keyframe* kf = map.keyframe(id);
+    const int level = kf->measurements().at(pid).level;
+    const double distance = (kf->T_w_c.translation() - removed.T_w_c.translation()).norm();
+    if (best < 0 || level < best_level || (level == best_level && distance < best_distance)) {
+      best = id, best_level = level, best_distance = distance;
+    }
+  }
+  return best;
+}
+
 }  // namespace
 
 void CullOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -36,6 +76,18 @@ void CullOptions::bind(OptionRegistry* r, const std::string& s) {
           "points with a larger share of outlier measurements are culled");
   r->bind(s, "max_point_depth_m", &max_depth_m, 1.0, 10000.0, "m",
           "points carried farther than this from their source keyframe's camera (or behind it) by bundle adjustment are culled");
+  r->bind(s, "cull_keyframes", &cull_keyframes, "remove keyframes whose points are nearly all measured in other keyframes");
+  r->bind(s, "keyframe_redundancy", &keyframe_redundancy, 0.0, 1.0, "-",
+          "a keyframe is redundant when this share of its measurements is also in keyframe_redundant_observers others at the same or a finer level");
+  r->bind(s, "keyframe_redundant_observers", &keyframe_redundant_observers, 1, 100, "keyframes",
+          "other keyframes that must measure a point for it to count as seen elsewhere (modes mono, depth-init)");
+  r->bind(s, "keyframe_redundant_observers_depth", &keyframe_redundant_observers_depth, 1, 100, "keyframes",
+          "the same in mode depth-ba, where bundle adjustment holds each measurement's depth too");
+  r->bind(s, "keyframe_cull_min_age", &keyframe_cull_min_age, 1, 1000, "keyframes",
+          "the newest this many keyframes are never culled");
+  r->bind(s, "keyframe_cull_min_points", &keyframe_cull_min_points, 0, 100000, "points",
+          "keyframes measuring fewer points are never culled: where points are this scarce the tracker leans on "
+          "the keyframes' depth surfaces (as tracker.keyframe_few_points)");
 }
 
 CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
@@ -91,6 +143,76 @@ std::vector<PointId> cullDivergedPoints(Map* map, const std::vector<PointId>& ca
     removed.push_back(pid);
   }
   return removed;
+}
+
+namespace {
+
+// Removes keyframe 'id' (see the header: its points re-described or removed).
+void removeKeyframe(Map* map, KeyframeId id, std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers,
+                    KeyframeCullResult* result) {
+  const Keyframe* kf = map->keyframe(id);
+  std::vector<PointId> measured;
+  for (const auto& [pid, m] : kf->measurements()) measured.push_back(pid);
+  std::sort(measured.begin(), measured.end());
+  for (PointId pid : measured) {
+    MapPoint* point = map->point(pid);
+    if (point->source_keyframe != id) continue;
+    const KeyframeId source = newSource(*map, pid, *kf);
+    if (source < 0) {
+      map->removePoint(pid);
+      result->removed_points.push_back(pid);
+      continue;
+    }
+    const Measurement& m = map->keyframe(source)->measurements().at(pid);
+    point->source_keyframe = source;
+    point->source_level = m.level;
+    point->source_uv = m.uv;
+    result->resourced_points.push_back(pid);
+  }
+  // Points described by it that it does not measure (a 2-D outlier at the source, removed
+  // before the point was culled) cannot keep it as their source either.
+  std::vector<PointId> described;
+  for (const auto& [pid, point] : map->points()) {
+    if (point.source_keyframe == id) described.push_back(pid);
+  }
+  std::sort(described.begin(), described.end());
+  for (PointId pid : described) {
+    map->removePoint(pid);
+    result->removed_points.push_back(pid);
+  }
+  map->removeKeyframe(id);
+  for (PointId pid : measured) {
+    if (map->point(pid) && map->observers(pid).empty()) {
+      map->removePoint(pid);
+      result->removed_points.push_back(pid);
+    }
+  }
+  for (auto it = pending_2d_outliers->begin(); it != pending_2d_outliers->end();) {
+    it = it->second == id ? pending_2d_outliers->erase(it) : std::next(it);
+  }
+  result->removed_keyframes.push_back(id);
+}
+
+}  // namespace
+
+KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId>& candidates,
+                                          const CullOptions& options,
+                                          std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers) {
+  KeyframeCullResult result;
+  for (KeyframeId id : candidates) {
+    const Keyframe* kf = map->keyframe(id);
+    if (id != 0 && kf && redundant(*map, *kf, options)) removeKeyframe(map, id, pending_2d_outliers, &result);
+  }
+  return result;
+}
+
+KeyframeCullResult removeKeyframes(Map* map, const std::vector<KeyframeId>& ids,
+                                   std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers) {
+  KeyframeCullResult result;
+  for (KeyframeId id : ids) {
+    if (id != 0 && map->hasKeyframe(id)) removeKeyframe(map, id, pending_2d_outliers, &result);
+  }
+  return result;
 }
 
 }  // namespace rgbdslam

@@ -70,6 +70,8 @@ class Mapper::Impl {
   MapChanges takeChanges() { return std::exchange(changes_, MapChanges{}); }
   const Map& map() const { return map_; }
   const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
+  long keyframesCulled() const { return keyframes_culled_; }
+  void removeKeyframes(const std::vector<KeyframeId>& ids);
 
  private:
   // Mono's scale drifts: an SE(3) pose graph cannot take that out (loop_closer.h).
@@ -96,6 +98,8 @@ class Mapper::Impl {
   std::set<KeyframeId> globalWindow() const;
   bool refindNewPoints(const std::atomic<bool>* interrupt);
   void cull();
+  void cullKeyframes();
+  void noteRemoval(const KeyframeCullResult& culled);
 
   PinholeCamera camera_;
   MapperOptions options_;
@@ -107,6 +111,9 @@ class Mapper::Impl {
   std::set<std::pair<PointId, KeyframeId>> pending_outliers_;  // 2-D outliers to remove
   bool global_ba_needed_ = false;
   bool cull_needed_ = false;
+  bool keyframe_cull_needed_ = false;  // a keyframe came since the last keyframe culling
+  std::vector<KeyframeId> added_since_keyframe_cull_;
+  long keyframes_culled_ = 0;
   int keyframes_since_global_ba_ = 0;
   MapChanges changes_;  // since the last takeChanges()
   bool changed_in_call_ = false;  // refine(): this call changed the map
@@ -142,6 +149,8 @@ MapperResult Mapper::Impl::addKeyframe(const KeyframeData& data, const std::atom
   if (result.loop.closed) global_ba_needed_ = true;
   global_ba_needed_ = global_ba_needed_ || ++keyframes_since_global_ba_ >= options_.ba_windows.global_ba_every;
   cull_needed_ = true;
+  keyframe_cull_needed_ = true;
+  added_since_keyframe_cull_.push_back(data.id);
   result.status = MapperResult::Status::kIntegrated;
   return result;
 }
@@ -345,6 +354,58 @@ void Mapper::Impl::cull() {
   cull_needed_ = false;
 }
 
+// Redundant keyframes (map_maintenance.h) among those that share a point with a keyframe
+// integrated since the last call (its covisible keyframes, as ORB-SLAM's local keyframes),
+// but for the newest keyframe_cull_min_age: once per new keyframe, after its points were
+// re-found in the others and outliers culled (the rule counts measurements). Why covisible,
+// not the newest ones: a keyframe becomes redundant as later keyframes measure its points,
+// which on the corridor goes on for metres (a point is measured in 21.6 keyframes on average).
+void Mapper::Impl::cullKeyframes() {
+  keyframe_cull_needed_ = false;
+  const std::vector<KeyframeId> added = std::exchange(added_since_keyframe_cull_, {});
+  if (!options_.cull.cull_keyframes || map_.keyframes().empty()) return;
+  const int min_age = options_.cull.keyframe_cull_min_age;
+  std::set<KeyframeId> young;
+  for (auto it = map_.keyframes().rbegin(); it != map_.keyframes().rend() && static_cast<int>(young.size()) < min_age; ++it) {
+    young.insert(it->first);
+  }
+  std::set<KeyframeId> covisible;
+  for (KeyframeId id : added) {
+    const Keyframe* kf = map_.keyframe(id);
+    if (!kf) continue;
+    for (const auto& [pid, m] : kf->measurements()) {
+      for (KeyframeId other : map_.observers(pid)) {
+        if (other != 0 && !young.count(other)) covisible.insert(other);
+      }
+    }
+  }
+  const std::vector<KeyframeId> candidates(covisible.begin(), covisible.end());
+  CullOptions cull = options_.cull;
+  if (mode_ == SlamMode::kDepthBa) cull.keyframe_redundant_observers = cull.keyframe_redundant_observers_depth;
+  noteRemoval(cullRedundantKeyframes(&map_, candidates, cull, &pending_outliers_));
+}
+
+void Mapper::Impl::removeKeyframes(const std::vector<KeyframeId>& ids) {
+  noteRemoval(rgbdslam::removeKeyframes(&map_, ids, &pending_outliers_));
+}
+
+void Mapper::Impl::noteRemoval(const KeyframeCullResult& culled) {
+  if (culled.removed_keyframes.empty()) return;
+  for (KeyframeId id : culled.removed_keyframes) {
+    changes_.keyframes.erase(id);
+    changes_.removed_keyframes.insert(id);
+    loop_closer_.onKeyframeRemoved(id);
+  }
+  changes_.points.insert(culled.resourced_points.begin(), culled.resourced_points.end());
+  for (PointId pid : culled.removed_points) {
+    changes_.points.erase(pid);
+    changes_.removed_points.insert(pid);
+  }
+  keyframes_culled_ += static_cast<long>(culled.removed_keyframes.size());
+  changed_in_call_ = true;
+  global_ba_needed_ = true;
+}
+
 bool Mapper::Impl::refine(const std::atomic<bool>* interrupt) {
   if (map_.numKeyframes() == 0) return false;
   changed_in_call_ = false;
@@ -358,6 +419,7 @@ bool Mapper::Impl::refine(const std::atomic<bool>* interrupt) {
     }
   }
   if (cull_needed_ && !interrupted(interrupt)) cull();
+  if (keyframe_cull_needed_ && !cull_needed_ && !interrupted(interrupt)) cullKeyframes();
   return changed_in_call_;
 }
 
@@ -372,5 +434,7 @@ bool Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(i
 MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
 const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
+long Mapper::keyframesCulled() const { return impl_->keyframesCulled(); }
+void Mapper::removeKeyframes(const std::vector<KeyframeId>& ids) { impl_->removeKeyframes(ids); }
 
 }  // namespace rgbdslam

@@ -126,6 +126,22 @@ bool PlaceDatabase::setPose(KeyframeId id, const SE3& T_w_k) {
   return true;
 }
 
+bool PlaceDatabase::remove(KeyframeId id) {
+  const Entry* found = find(id);
+  if (!found) return false;
+  const int index = static_cast<int>(found - entries_.data());
+  Entry& entry = entries_[static_cast<size_t>(index)];
+  for (const auto& [word, weight] : entry.bag) {
+    std::vector<Posting>& postings = inverted_[static_cast<size_t>(word)];
+    postings.erase(std::remove_if(postings.begin(), postings.end(),
+                                  [index](const Posting& p) { return p.entry == index; }),
+                   postings.end());
+  }
+  entry.bag = BowVector{};
+  entry.features = Features3d{};
+  return true;
+}
+
 const PlaceDatabase::Entry* PlaceDatabase::find(KeyframeId id) const {
   const auto it = std::lower_bound(entries_.begin(), entries_.end(), id,
                                    [](const Entry& e, KeyframeId key) { return e.id < key; });

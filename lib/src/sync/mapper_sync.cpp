@@ -17,7 +17,8 @@ const char* toString(IntakeVerdict verdict) {
 MapperSync::MapperSync(Mapper* mapper, const MapperSyncOptions& options, KeyframeJournal* journal)
     : mapper_(mapper), options_(options), journal_(journal), publisher_(options.publisher) {}
 
-Status MapperSync::restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version) {
+Status MapperSync::restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version,
+                           const std::vector<KeyframeId>& culled) {
   std::lock_guard<std::mutex> lock(mutex_);
   for (const IncomingKeyframe& incoming : journaled) {
     const KeyframeData& kf = incoming.keyframe;
@@ -35,6 +36,7 @@ Status MapperSync::restore(const std::vector<IncomingKeyframe>& journaled, int64
     next_id_ = kf.id + 1;
     ++counters_.restored;
   }
+  mapper_->removeKeyframes(culled);
   mapper_->takeChanges();  // the first publication is a snapshot anyway
   if (map_id_ != 0) publisher_.start(map_id_, last_version);
   converged_ = counters_.restored == 0;
@@ -151,6 +153,7 @@ std::optional<IntegrationStep> MapperSync::integrateNext() {
   if (journal_) {
     if (Status s = journal_->appendKeyframe(incoming); !s) step.journal_error = s.error();
   }
+  MapChanges changes = takeChangesJournaled();  // before the lock: a journal write syncs the disk
   std::lock_guard<std::mutex> lock(mutex_);
   if (!step.journal_error.empty()) ++counters_.journal_errors;
   if (map_id_ == 0) {
@@ -161,17 +164,29 @@ std::optional<IntegrationStep> MapperSync::integrateNext() {
   next_id_ = incoming.keyframe.id + 1;
   integrating_ = -1;
   ++counters_.integrated;
-  publisher_.note(mapper_->takeChanges(), /*integrated=*/true);
+  publisher_.note(changes, /*integrated=*/true);
   converged_ = false;
   return step;
+}
+
+// The mapper's changes, its culled keyframes journaled first (worker thread, outside the
+// lock; a failed write is counted as a journal error).
+MapChanges MapperSync::takeChangesJournaled() {
+  MapChanges changes = mapper_->takeChanges();
+  if (journal_ && !changes.removed_keyframes.empty()) {
+    const std::vector<KeyframeId> ids(changes.removed_keyframes.begin(), changes.removed_keyframes.end());
+    if (Status s = journal_->appendCulled(ids); !s) culled_journal_errors_.fetch_add(1);
+  }
+  return changes;
 }
 
 bool MapperSync::refine() {
   if (converged_) return false;
   const bool changed = mapper_->refine(&interrupt_);
   converged_ = !changed && !interrupt_;
+  MapChanges changes = takeChangesJournaled();
   std::lock_guard<std::mutex> lock(mutex_);
-  publisher_.note(mapper_->takeChanges(), /*integrated=*/false);
+  publisher_.note(changes, /*integrated=*/false);
   return changed;
 }
 
@@ -214,6 +229,7 @@ void MapperSync::stop() {
 MapperSync::Counters MapperSync::counters() const {
   std::lock_guard<std::mutex> lock(mutex_);
   Counters c = counters_;
+  c.journal_errors += culled_journal_errors_.load();
   c.snapshots_published = publisher_.snapshotsPublished();
   c.snapshots_asked = publisher_.snapshotsAsked();
   return c;

@@ -146,7 +146,25 @@ bool MapReplica::apply(const MapUpdate& update) {
     else unknown = true;
   }
   for (PointId id : update.removed_points) removePoint(id);
+  for (KeyframeId id : update.removed_keyframes) {
+    // The mapper culls only keyframes it has integrated, never keyframe 0: a message naming
+    // another is refused for it (this keyframe would never come back to the replica).
+    if (id == 0 || !acked_.count(id)) unknown = unknown || map_.hasKeyframe(id);
+    else removeKeyframe(id);
+  }
   return !unknown;
+}
+
+// After the update's points: those the mapper kept were re-described from other keyframes;
+// any still described by this keyframe (the mapper never had them) go with it.
+void MapReplica::removeKeyframe(KeyframeId id) {
+  if (!map_.hasKeyframe(id)) return;
+  std::vector<PointId> described;
+  for (const auto& [pid, point] : map_.points()) {
+    if (point.source_keyframe == id) described.push_back(pid);
+  }
+  for (PointId pid : described) removePoint(pid);
+  map_.removeKeyframe(id);
 }
 
 }  // namespace rgbdslam

@@ -101,7 +101,13 @@ class Tracker::Impl {
   }
 
   bool applyMap(const MapUpdate& update) {
+    reanchorBeforeCull(update.removed_keyframes);
     const bool known = replica_.apply(update);
+    if (update.is_snapshot || !update.removed_keyframes.empty()) {  // keyframes the mapper culled
+      for (auto it = extras_.begin(); it != extras_.end();) {
+        it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
+      }
+    }
     followMapCorrection();
     return known;
   }
@@ -188,6 +194,7 @@ class Tracker::Impl {
   // Map corrections: after a map update, the tracker's pose moves as the keyframe nearest
   // it moved, and the published offset takes up the difference (TrackerOptions::correction_*).
   void followMapCorrection();
+  void reanchorBeforeCull(const std::vector<KeyframeId>& removed);
   // The anchor: the source keyframe of most of the points found (the pose rests on them),
   // else the keyframe nearest the pose.
   void setAnchor();
@@ -738,6 +745,19 @@ void Tracker::Impl::setAnchor() {
     if (!nearest.empty()) best = replica_.map().keyframe(nearest.front());
   }
   if (best) anchor_ = Anchor{best->id, best->T_w_c};
+}
+
+// The anchor keyframe is about to be culled: the nearest keyframe that stays takes its place,
+// with its pose before this update, so that a correction arriving with the cull is followed.
+void Tracker::Impl::reanchorBeforeCull(const std::vector<KeyframeId>& removed) {
+  if (!anchor_ || std::find(removed.begin(), removed.end(), anchor_->id) == removed.end()) return;
+  anchor_.reset();
+  const Map& map = replica_.map();
+  for (KeyframeId id : map.nearestKeyframes(T_c_w_.inverse(), map.numKeyframes())) {
+    if (std::find(removed.begin(), removed.end(), id) != removed.end()) continue;
+    anchor_ = Anchor{id, map.keyframe(id)->T_w_c};
+    return;
+  }
 }
 
 void Tracker::Impl::followMapCorrection() {

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <unordered_map>
 #include <vector>
 
@@ -99,6 +100,12 @@ class Map {
   const Keyframe* keyframe(KeyframeId id) const;
   bool hasKeyframe(KeyframeId id) const { return keyframes_.count(id) > 0; }
   const std::map<KeyframeId, std::unique_ptr<Keyframe>>& keyframes() const { return keyframes_; }
+  // Removes the keyframe and every measurement made in it, and remembers its id. Points
+  // whose source it is keep a dangling source: the caller re-describes them from another
+  // keyframe or removes them first (map_maintenance.h).
+  void removeKeyframe(KeyframeId id);
+  // Every keyframe removed so far (snapshots list them: map_diff.h).
+  const std::set<KeyframeId>& removedKeyframes() const { return removed_keyframes_; }
   size_t numKeyframes() const { return keyframes_.size(); }
 
   // Adds or replaces a point (keeps tracker statistics when replacing).
@@ -128,6 +135,7 @@ class Map {
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
   std::unordered_map<PointId, MapPoint> points_;
   std::unordered_map<PointId, std::vector<KeyframeId>> observers_;
+  std::set<KeyframeId> removed_keyframes_;
 };
 
 }  // namespace rgbdslam

@@ -3,12 +3,14 @@
 // the state it last published. A delta lists the keyframes whose pose moved by more than a
 // threshold since they were last published, the points that are new (in full), the points
 // that moved by more than a threshold (id and position only: a third of the bytes), and the
-// ids removed; a snapshot lists everything in full.
+// ids of points and keyframes removed; a snapshot lists everything in full, and every
+// keyframe culled so far (8 bytes each).
 // Deltas are built from the mapper's change reports (MapChanges), so their cost grows with
 // what changed, not with the map. An entry below its threshold is not sent and its baseline
 // (the value last published) is kept, so slow drift accumulates until it crosses the
-// threshold (nothing is lost, only postponed). A point never changes its patch (source
-// keyframe, level, pixel) once published. Versions and acknowledgements are the
+// threshold (nothing is lost, only postponed). A point changes its patch (source keyframe,
+// level, pixel) only when its source keyframe is culled (map_maintenance.h); it is then sent
+// in full again. Versions and acknowledgements are the
 // publisher's business (sync/map_publisher.h).
 // Thresholds: 1 mm moves a point at 2 m by 0.26 px in a 525 px camera, below the tracker's
 // measurement noise; the same for keyframe centres, and 0.5 mrad for their orientation.
@@ -38,7 +40,11 @@ class MapDiffer {
 
  private:
   MapDiffOptions options_;
-  std::unordered_map<PointId, Vec3> points_;  // position as last published
+  struct PublishedPoint {
+    Vec3 p_w;            // position as last published
+    KeyframeId source;   // source keyframe as last published
+  };
+  std::unordered_map<PointId, PublishedPoint> points_;
   std::map<KeyframeId, SE3> keyframes_;       // pose as last published
 };
 

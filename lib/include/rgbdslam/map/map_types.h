@@ -58,6 +58,10 @@ struct MapUpdate {
   std::vector<MapPointData> points;         // new or re-described points (all, in a snapshot)
   std::vector<PointPosition> moved_points;  // known points that only moved (patch unchanged)
   std::vector<PointId> removed_points;
+  // Keyframes culled as redundant (map_maintenance.h); their points that stay were
+  // re-described from another keyframe and are in 'points'. A snapshot lists every keyframe
+  // culled so far.
+  std::vector<KeyframeId> removed_keyframes;
 };
 
 // What changed in a map since it was last asked (Mapper::takeChanges): the map publisher
@@ -66,7 +70,10 @@ struct MapChanges {
   std::set<KeyframeId> keyframes;   // new, or pose changed
   std::set<PointId> points;         // new, or position changed
   std::set<PointId> removed_points; // culled (never in 'points' at the same time)
-  bool empty() const { return keyframes.empty() && points.empty() && removed_points.empty(); }
+  std::set<KeyframeId> removed_keyframes;  // culled (never in 'keyframes' at the same time)
+  bool empty() const {
+    return keyframes.empty() && points.empty() && removed_points.empty() && removed_keyframes.empty();
+  }
   void merge(const MapChanges& later);
 };
 

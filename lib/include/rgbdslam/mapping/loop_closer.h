@@ -91,6 +91,8 @@ class LoopCloser {
   // Keyframe 'id', just integrated into 'map' (ids increasing; a loaded map's keyframes
   // through here too, with 'close' false). Moved keyframes and points go into 'changes'.
   LoopClosureResult onKeyframe(Map* map, KeyframeId id, MapChanges* changes, bool close = true);
+  // Keyframe 'id' was culled from the map (map_maintenance.h): no longer a place to close to.
+  void onKeyframeRemoved(KeyframeId id);
   const LoopClosureCounters& counters() const { return counters_; }
 
  private:

@@ -12,6 +12,33 @@
 // snapshot held it too), so it tracked a stale map for the rest of the run. Far points are
 // not culled sooner: their direction still fixes the rotation (with a limit of 40 m the
 // mono corridor, 900 frames, lost its scale: ATE 5.4 m instead of 15-17 mm).
+// cullRedundantKeyframes (issue 10, item 2): ORB-SLAM's keyframe culling. A keyframe goes
+// when at least keyframe_redundancy of its measurements are also measured in at least
+// keyframe_redundant_observers other keyframes at the same or a finer pyramid level: the
+// map loses no point and little geometry, and every keyframe fewer is bundle adjustment,
+// memory on both ends and map-message bytes saved. Except a keyframe that measures fewer
+// than keyframe_cull_min_points (the tracker's keyframe_few_points, 60): the tracker made it
+// where points are scarce, and there it tracks with the help of the nearest keyframes' depth
+// surfaces (depth_alignment.h), which the point count does not see. Measured on the office
+// (plain walls; its keyframes measure 17-77 points, the corridor's 112-635, 10th-90th
+// percentile): culling those left 8 of 36 keyframes and the tracker was lost for good at
+// frame 215 instead of 770 (rgbd-slam --source synth:office --deterministic).
+// How many other keyframes: 3 (ORB-SLAM's) where bundle adjustment sees only directions
+// (mono, depth-init), 2 in depth-ba, where each measurement's depth residual holds the point
+// too (the mapper passes the one for its mode as keyframe_redundant_observers). Measured
+// (rgbd-slam --deterministic, corridor 900 frames / full): with 3 in depth-ba, 60 / 252
+// keyframes left (2.0 / 2.3 per metre), ATE 13.1 / 18.9 mm; with 2, 32 / 127 (1.1 / 1.2 per
+// metre), 13.4 / 33.1 mm (32.0 mm without culling), room 1.75 mm (1.67); in mono 2 cost
+// the corridor's scale (93 mm against 17.7 mm with 3). Why: where points are scarce (a corridor
+// seen head-on) the tracker must add a keyframe every few frames to keep finding enough
+// points (keyframe_policy.h); measured on maps saved at the end of a run, all but 133 of the
+// full corridor's 789 keyframes pass this rule (docs/open_work.md).
+// What the removal does: the keyframe's measurements go; a point whose patch it held takes
+// the patch of another keyframe that measures it (the finest level, then the camera nearest
+// the removed one; never keyframe 0, whose points hold the scale in the 2-D modes), and the
+// map publisher sends it in full again; a point no other keyframe measures goes. Keyframe 0
+// (the gauge) is never culled; the caller keeps the newest keyframes out of 'candidates'
+// (the tracker is still extending them and re-finding has not yet searched them).
 #include <set>
 #include <utility>
 #include <vector>
@@ -29,6 +56,12 @@ struct CullOptions {
   // A tenth of the protocol's world bound: a point this far is at infinity for any camera
   // of ours (its direction is all it gives), and no published position comes near the bound.
   double max_depth_m = 1000.0;        // [m] in the source keyframe
+  bool cull_keyframes = true;         // remove redundant keyframes (see above)
+  double keyframe_redundancy = 0.9;   // share of measurements seen elsewhere to be redundant [0, 1]
+  int keyframe_redundant_observers = 3;  // ...in at least this many other keyframes (2-D modes)
+  int keyframe_redundant_observers_depth = 2;  // ...in mode depth-ba (see above)
+  int keyframe_cull_min_age = 5;      // the newest this many keyframes are never culled [keyframes]
+  int keyframe_cull_min_points = 60;  // keyframes measuring fewer points are never culled [points]
 
   void bind(OptionRegistry* registry, const std::string& section);
 };
@@ -46,6 +79,23 @@ CullResult cullMap(Map* map, std::set<std::pair<PointId, KeyframeId>>* pending_2
 // keyframe's camera or deeper in it than max_depth_m (see above); returns their ids. Run
 // at once after every adjustment, so that no published map holds them.
 std::vector<PointId> cullDivergedPoints(Map* map, const std::vector<PointId>& candidates, double max_depth_m);
+
+struct KeyframeCullResult {
+  std::vector<KeyframeId> removed_keyframes;  // in the order removed
+  std::vector<PointId> resourced_points;      // now described by another keyframe's patch
+  std::vector<PointId> removed_points;        // measured in no other keyframe
+};
+
+// Tests the 'candidates' in order (each removal counts for the following tests) and removes
+// the redundant ones (see above). Pending 2-D outliers of removed keyframes are dropped.
+KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId>& candidates,
+                                          const CullOptions& options,
+                                          std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers);
+
+// Removes the listed keyframes as culling does, without judging them (a restarted mapper
+// repeats the culls of its journal); keyframe 0 and unknown ids are left alone.
+KeyframeCullResult removeKeyframes(Map* map, const std::vector<KeyframeId>& ids,
+                                   std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers);
 
 // Point ids of the map in increasing order.
 std::vector<PointId> sortedPointIds(const Map& map);

@@ -12,7 +12,8 @@
 //   refine(interrupt): the background work, one PTAM loop pass per call: re-find the newest
 //   points in the other keyframes (data_association.h), global bundle adjustment (all but
 //   keyframe 0; only the newest max_global_ba_keyframes free), then cull 2-D outlier
-//   measurements and points with too few good ones (map_maintenance.h). Returns true when
+//   measurements and points with too few good ones, then, once per new keyframe, redundant
+//   keyframes (both map_maintenance.h). Returns true when
 //   the map changed, false when there is nothing left to do (converged). Interrupted
 //   (returns early, keeping what was done) when *interrupt becomes true, i.e. a new
 //   keyframe arrived.
@@ -125,6 +126,9 @@ class Mapper {
   MapChanges takeChanges();
   const Map& map() const;
   const LoopClosureCounters& loopClosures() const;
+  long keyframesCulled() const;  // redundant keyframes removed so far
+  // Removes the keyframes as culling would, unjudged (a restart repeating its journal's culls).
+  void removeKeyframes(const std::vector<KeyframeId>& ids);
 
  private:
   class Impl;

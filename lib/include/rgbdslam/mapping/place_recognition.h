@@ -158,6 +158,9 @@ class PlaceDatabase {
   void add(KeyframeId id, const SE3& T_w_k, Features3d features);
   // Moves a keyframe (after bundle adjustment or a loop closure). False if it is unknown.
   bool setPose(KeyframeId id, const SE3& T_w_k);
+  // A keyframe culled from the map: never a candidate again; its features and words are
+  // freed (its entry stays, a pose and the path length to it). False if it is unknown.
+  bool remove(KeyframeId id);
   size_t size() const { return entries_.size(); }
 
   // Keyframes by appearance, best first: at most options.candidates, each scoring at least

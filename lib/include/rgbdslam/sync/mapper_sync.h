@@ -58,6 +58,8 @@ class KeyframeJournal {
   virtual ~KeyframeJournal() = default;
   virtual Status appendKeyframe(const IncomingKeyframe& keyframe) = 0;
   virtual Status appendVersion(int64_t version) = 0;
+  // Keyframes the mapper culled, before any publication says so.
+  virtual Status appendCulled(const std::vector<KeyframeId>& ids) = 0;
 };
 
 struct MapperSyncOptions {
@@ -84,8 +86,10 @@ class MapperSync {
  public:
   MapperSync(Mapper* mapper, const MapperSyncOptions& options, KeyframeJournal* journal = nullptr);
 
-  // Re-integrates journaled keyframes (in order) and continues after last_version.
-  Status restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version);
+  // Re-integrates journaled keyframes (in order), removes the journaled culls ('culled') and
+  // continues after last_version.
+  Status restore(const std::vector<IncomingKeyframe>& journaled, int64_t last_version,
+                 const std::vector<KeyframeId>& culled = {});
   void adopt(int64_t map_id, KeyframeId next_id);
 
   // Transport thread.
@@ -118,6 +122,7 @@ class MapperSync {
   bool nextReadyLocked() const { return queue_.count(next_id_) > 0; }
   void dropForeignLocked();
   void skipUnsendableLocked(const MapReceipt& receipt);
+  MapChanges takeChangesJournaled();
 
   Mapper* mapper_;
   MapperSyncOptions options_;
@@ -136,6 +141,7 @@ class MapperSync {
   // Worker only:
   bool converged_ = true;
   std::atomic<bool> interrupt_{false};
+  std::atomic<long> culled_journal_errors_{0};
 };
 
 }  // namespace rgbdslam

@@ -7,8 +7,12 @@
 //   order. A snapshot replaces the poses and points of acknowledged keyframes (points of
 //   acknowledged keyframes absent from it were culled by the mapper); provisional points of
 //   keyframes the mapper has not acknowledged stay. A delta updates the listed keyframes,
-//   adds the new points, moves the moved ones (keeping their slots' patch caches) and
-//   removes the listed ids. Entries that name keyframes the replica lacks are skipped.
+//   adds the new points (a known point sent in full again was re-described from another
+//   keyframe: its slot is made anew), moves the moved ones (keeping their slots' patch
+//   caches) and removes the listed ids. Keyframes the mapper culled (acknowledged ones
+//   other than keyframe 0; any other named is kept and reported as unknown) (listed in a delta, and
+//   all of them in a snapshot) go last, with any point still described by them; a keyframe
+//   merely absent from a snapshot stays (a mapper that lost its journal has not had it again yet). Entries that name keyframes the replica lacks are skipped.
 //   updateLocalMap(wanted): the local map. The keyframes nearest the camera keep their
 //   pyramid ('hot'); the others are 'cold': their level-0 image is kept as JPEG (encoded
 //   once), the pyramid freed, and their points are not searched (makeKeyframeViews marks
@@ -73,6 +77,7 @@ class MapReplica {
   void addSlot(MapPoint* point);
   void removeSlot(PointId id);
   void removePoint(PointId id);
+  void removeKeyframe(KeyframeId id);
   bool thaw(Keyframe* keyframe);
   void freeze(Keyframe* keyframe, int jpeg_quality);
 
