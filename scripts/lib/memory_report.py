@@ -2,7 +2,8 @@
 """Figures and a plot from the memory samples of scripts/lib/suite.sh's sample_memory
 ("t_s rgbd-tracker_rss_mb rgbd-mapper_rss_mb" lines, "-" once a process has ended).
 
-  memory_report.py MEMORY_TXT KEYFRAMES GROUNDTRUTH   key-value figures on stdout
+  memory_report.py MEMORY_TXT KEYFRAMES GROUNDTRUTH [KEYFRAMES_IN_MAP]
+                                                      key-value figures on stdout
   memory_report.py --svg OUT.svg MEMORY_TXT LABEL...  memory over time, one colour per run
                                                       (tracker solid, mapper dashed)
 Standard library only (no numpy on a fresh machine)."""
@@ -46,7 +47,7 @@ def path_length(groundtruth):
     return total
 
 
-def report(memory, keyframes, groundtruth):
+def report(memory, keyframes, groundtruth, keyframes_in_map=0):
     rows = samples(memory)
     tracker = [(t, v) for t, v, _ in rows if v is not None]
     mapper = [(t, v) for t, _, v in rows if v is not None]
@@ -66,6 +67,8 @@ def report(memory, keyframes, groundtruth):
     out["groundtruth_path_m"] = path_length(groundtruth)
     if keyframes > 0 and out["groundtruth_path_m"] > 0:
         out["keyframes_per_groundtruth_m"] = keyframes / out["groundtruth_path_m"]
+    if keyframes_in_map > 0 and out["groundtruth_path_m"] > 0:
+        out["keyframes_in_map_per_groundtruth_m"] = keyframes_in_map / out["groundtruth_path_m"]
     for key, value in out.items():
         print(f"{key} {value:.3f}")
 
@@ -110,7 +113,7 @@ if __name__ == "__main__":
     args = sys.argv[1:]
     if args[:1] == ["--svg"] and len(args) >= 4 and len(args) % 2 == 0:
         svg(args[1], list(zip(args[2::2], args[3::2])))
-    elif len(args) == 3:
-        report(args[0], int(args[1] or 0), args[2])
+    elif len(args) in (3, 4):
+        report(args[0], int(args[1] or 0), args[2], int(args[3] or 0) if len(args) == 4 else 0)
     else:
         sys.exit(__doc__)
