@@ -77,6 +77,7 @@ TEST(KeyframeCulling, ARedundantKeyframeGoesAndItsPointsTakeAnotherPatch) {
   std::set<std::pair<PointId, KeyframeId>> pending{{7, 2}, {7, 3}};
   CullOptions options;
   options.keyframe_cull_min_points = 0;
+  options.keyframe_redundant_observers = 3;
   // Keyframe 2: 100 of 102 measurements are also in 3 others at level 1 or finer (0, 1, 4).
   const KeyframeCullResult culled = cullRedundantKeyframes(&map, {2}, options, &pending);
   ASSERT_EQ(culled.removed_keyframes, (std::vector<KeyframeId>{2}));
@@ -107,6 +108,8 @@ TEST(KeyframeCulling, KeepsKeyframeZeroAndKeyframesWithTheirOwnPointsOrTooFewPoi
   // 3 others at its level or finer (keyframe 3 measures them coarser).
   options.keyframe_redundant_observers = 4;
   EXPECT_TRUE(cullRedundantKeyframes(&map, {0, 2, 5}, options, &pending).removed_keyframes.empty());
+  options.keyframe_redundant_observers = 0;  // the default in mono and depth-init: no culling
+  EXPECT_TRUE(cullRedundantKeyframes(&map, {0, 1, 2, 3, 4, 5}, options, &pending).removed_keyframes.empty());
   options.keyframe_redundant_observers = 3;
   options.keyframe_cull_min_points = 103;  // keyframe 2 measures 102
   EXPECT_TRUE(cullRedundantKeyframes(&map, {0, 2, 5}, options, &pending).removed_keyframes.empty());

@@ -79,8 +79,9 @@ void CullOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "cull_keyframes", &cull_keyframes, "remove keyframes whose points are nearly all measured in other keyframes");
   r->bind(s, "keyframe_redundancy", &keyframe_redundancy, 0.0, 1.0, "-",
           "a keyframe is redundant when this share of its measurements is also in keyframe_redundant_observers others at the same or a finer level");
-  r->bind(s, "keyframe_redundant_observers", &keyframe_redundant_observers, 1, 100, "keyframes",
-          "other keyframes that must measure a point for it to count as seen elsewhere (modes mono, depth-init)");
+  r->bind(s, "keyframe_redundant_observers", &keyframe_redundant_observers, 0, 100, "keyframes",
+          "other keyframes that must measure a point for it to count as seen elsewhere in modes mono and depth-init "
+          "(0: no keyframe is culled in those modes)");
   r->bind(s, "keyframe_redundant_observers_depth", &keyframe_redundant_observers_depth, 1, 100, "keyframes",
           "the same in mode depth-ba, where bundle adjustment holds each measurement's depth too");
   r->bind(s, "keyframe_cull_min_age", &keyframe_cull_min_age, 1, 1000, "keyframes",
@@ -199,6 +200,7 @@ KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId
                                           const CullOptions& options,
                                           std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers) {
   KeyframeCullResult result;
+  if (options.keyframe_redundant_observers < 1) return result;  // culling off for this mode
   for (KeyframeId id : candidates) {
     const Keyframe* kf = map->keyframe(id);
     if (id != 0 && kf && redundant(*map, *kf, options)) removeKeyframe(map, id, pending_2d_outliers, &result);

@@ -23,13 +23,18 @@
 // (plain walls; its keyframes measure 17-77 points, the corridor's 112-635, 10th-90th
 // percentile): culling those left 8 of 36 keyframes and the tracker was lost for good at
 // frame 215 instead of 770 (rgbd-slam --source synth:office --deterministic).
-// How many other keyframes: 3 (ORB-SLAM's) where bundle adjustment sees only directions
-// (mono, depth-init), 2 in depth-ba, where each measurement's depth residual holds the point
-// too (the mapper passes the one for its mode as keyframe_redundant_observers). Measured
-// (rgbd-slam --deterministic, corridor 900 frames / full): with 3 in depth-ba, 60 / 252
-// keyframes left (2.0 / 2.3 per metre), ATE 13.1 / 18.9 mm; with 2, 32 / 127 (1.1 / 1.2 per
-// metre), 13.4 / 33.1 mm (32.0 mm without culling), room 1.75 mm (1.67); in mono 2 cost
-// the corridor's scale (93 mm against 17.7 mm with 3). Why: where points are scarce (a corridor
+// How many other keyframes: 2 in depth-ba, where each measurement's depth residual holds
+// the point too. Measured (rgbd-slam --deterministic, corridor 900 frames / full): with 3,
+// 60 / 252 keyframes left (2.0 / 2.3 per metre), ATE 13.1 / 18.9 mm; with 2, 32 / 127
+// (1.1 / 1.2 per metre), 13.4 / 33.1 mm (32.0 mm without culling), room 1.75 mm (1.67).
+// Where bundle adjustment sees only directions (mono, depth-init) no keyframe is culled by
+// default (keyframe_redundant_observers 0): there a point's depth rests on the baselines of
+// the keyframes that measure it, and every measured culling cost accuracy on the corridor,
+// where culling matters (ORB-SLAM's 3 other keyframes; ATE without / with culling): mono
+// 450 frames 54.7 / 62.1 mm, 900 frames 17.1 / 17.8 mm; depth-init 450 frames 66.9 / 68.6 mm
+// and a frame lost to the depth check, 900 frames 88 / 197 mm; with 2 mono lost the scale
+// (93 mm). The flight's mode is depth-ba.
+// Why so many keyframes are redundant: where points are scarce (a corridor
 // seen head-on) the tracker must add a keyframe every few frames to keep finding enough
 // points (keyframe_policy.h); measured on maps saved at the end of a run, all but 133 of the
 // full corridor's 789 keyframes pass this rule (docs/open_work.md).
@@ -58,7 +63,7 @@ struct CullOptions {
   double max_depth_m = 1000.0;        // [m] in the source keyframe
   bool cull_keyframes = true;         // remove redundant keyframes (see above)
   double keyframe_redundancy = 0.9;   // share of measurements seen elsewhere to be redundant [0, 1]
-  int keyframe_redundant_observers = 3;  // ...in at least this many other keyframes (2-D modes)
+  int keyframe_redundant_observers = 0;  // ...in mono, depth-init (0: no culling there; see above)
   int keyframe_redundant_observers_depth = 2;  // ...in mode depth-ba (see above)
   int keyframe_cull_min_age = 5;      // the newest this many keyframes are never culled [keyframes]
   int keyframe_cull_min_points = 60;  // keyframes measuring fewer points are never culled [points]
