@@ -1,5 +1,7 @@
 #include "common/process.h"
 
+#include <malloc.h>
+
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -33,6 +35,10 @@ MemoryUsage memoryUsage() {
     if (target && status >> value) *target = value;
     status.ignore(1 << 12, '\n');
   }
+#if !defined(__SANITIZE_ADDRESS__)  // ASan's allocator is not malloc's: heap_kb stays -1
+  const struct mallinfo2 heap = mallinfo2();  // glibc: summed over every arena
+  usage.heap_kb = static_cast<int64_t>((heap.uordblks + heap.hblkhd) / 1024);
+#endif
   return usage;
 }
 
@@ -43,6 +49,12 @@ void printPeakRss() {
   } else {
     std::printf("peak_rss_mb %.1f\n", usage.peak_rss_kb / 1024.0);
   }
+}
+
+void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store) {
+  if (!store || !store->inMemory()) return;
+  std::cerr << program << ": warning: the keyframe store is on a RAM file system (tmpfs): cold keyframes "
+            << "take memory there; set tracker.local_map_store_dir to a directory on storage\n";
 }
 
 int64_t utimeNow() {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "rgbdslam/util/expected.h"
+#include "rgbdslam/tracking/keyframe_store.h"
 
 namespace rgbdslam {
 
@@ -23,14 +24,22 @@ int64_t utimeNow();
 // This process's resident memory: now (VmRSS) and its peak so far (VmHWM), from
 // /proc/self/status [kB]; -1 where it cannot be read (not Linux, /proc not mounted). Every
 // process reports both in its status messages (rss_kb, peak_rss_kb) and prints peak_rss_mb
-// at exit, so memory over a long flight can be followed from the ground.
+// at exit, so memory over a long flight can be followed from the ground. heap_kb is what
+// the program holds from malloc now (glibc's mallinfo2: blocks in use plus mmapped ones):
+// RSS growing while it stays flat is the allocator's fragmentation, not the program's data
+// (-1 under AddressSanitizer, whose allocator mallinfo2 does not see).
 struct MemoryUsage {
   int64_t rss_kb = -1;
   int64_t peak_rss_kb = -1;
+  int64_t heap_kb = -1;
 };
 MemoryUsage memoryUsage();
 // Prints "peak_rss_mb X.X" (or "peak_rss_mb unknown") on stdout, the exit summary's form.
 void printPeakRss();
+
+// A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
+// bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.
+void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store);
 
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);

@@ -197,7 +197,8 @@ void MapperNode::publishStatus() {
                      {"map_bytes", map_bytes_.load()},
                      {"journal_errors", c.journal_errors},
                      {"rss_kb", memory.rss_kb},
-                     {"peak_rss_kb", memory.peak_rss_kb}};
+                     {"peak_rss_kb", memory.peak_rss_kb},
+                     {"heap_kb", memory.heap_kb}};
   status.timings_ms = {{"integrate_ms_median", integrate_ms_.quantile(0.5)},
                        {"local_ba_ms_median", local_ba_ms_.quantile(0.5)},
                        {"local_ba_ms_max", local_ba_ms_.quantile(1.0)},

@@ -175,6 +175,11 @@ void BatchRunner::logFrame(const TrackResult& result) {
 }
 
 int BatchRunner::run(const std::atomic<bool>& stop) {
+  if (const Status& store = slam_->tracker().keyframeStoreStatus(); !store) {
+    std::cerr << "rgbd-slam: " << store.error() << "\n";
+    return 2;
+  }
+  warnIfStoreInMemory("rgbd-slam", slam_->tracker().keyframeStore());
   Trajectory trajectory;
   TrackResult last;
   long frames = 0;

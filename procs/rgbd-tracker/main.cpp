@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
   TrackerNode node(local->get(), link, *camera, config->slam->tracker, *parseSlamMode(config->slam->mode),
                    *map_id,
                    TrackerNodeOptions{config->procs->channels, config->procs->tracker_node, config->slam->sync});
+  if (!node.keyframeStoreStatus()) return usageError("rgbd-tracker", node.keyframeStoreStatus().error());
+  warnIfStoreInMemory("rgbd-tracker", node.keyframeStore());
   if (start_map) node.startFrom(*start_map, cli.has("localise-only"));
   const int status = node.run(installStopHandlers());
   node.printSummary();

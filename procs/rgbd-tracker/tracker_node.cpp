@@ -268,6 +268,7 @@ void TrackerNode::publishStatus() {
   status.state = toString(state_);
   const Counters& c = counters_;
   const MemoryUsage memory = memoryUsage();
+  const KeyframeStore* store = tracker_.keyframeStore();
   status.counters = {{"map_id", map_id_},
                      {"map_version", sync_.follower().version()},
                      {"map_version_newest_seen", sync_.follower().newestSeen()},
@@ -284,6 +285,10 @@ void TrackerNode::publishStatus() {
                      {"keyframe_rung", c.last_rung},
                      {"points", static_cast<int64_t>(tracker_.map().numPoints())},
                      {"keyframes_hot", hotKeyframes(tracker_.map())},
+                     {"keyframe_store_entries", store ? static_cast<int64_t>(store->entries()) : 0},
+                     {"keyframe_store_kb", store ? store->bytes() / 1024 : 0},
+                     {"keyframe_store_disk_kb", store ? store->diskBytes() / 1024 : 0},
+                     {"keyframe_store_errors", store ? store->errors() : 0},
                      {"frames", c.frames},
                      {"frames_skipped", c.frames_skipped},
                      {"poses", c.poses},
@@ -306,7 +311,8 @@ void TrackerNode::publishStatus() {
                      {"maps_unknown_keyframe", c.maps_unknown_keyframe},
                      {"maps_implausible", c.maps_implausible},
                      {"rss_kb", memory.rss_kb},
-                     {"peak_rss_kb", memory.peak_rss_kb}};
+                     {"peak_rss_kb", memory.peak_rss_kb},
+                     {"heap_kb", memory.heap_kb}};
   status.timings_ms = {{"track_ms_median", track_ms_.quantile(0.5)},
                        {"track_ms_p99", track_ms_.quantile(0.99)},
                        {"latency_ms_median", latency_ms_.quantile(0.5)},
@@ -336,6 +342,10 @@ void TrackerNode::printSummary() const {
   }
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
+  if (const KeyframeStore* store = tracker_.keyframeStore()) {
+    std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,
+                static_cast<long>(store->errors()));
+  }
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",

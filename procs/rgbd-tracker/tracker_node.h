@@ -57,6 +57,9 @@ class TrackerNode {
   // does with the same file and map id: keyframe ids continue after the file's. With
   // 'localise_only' the tracker adds no keyframes (tracker.h, load).
   void startFrom(const LoadedMap& map, bool localise_only);
+  // Ok, or why the keyframe store the options asked for could not be made.
+  const Status& keyframeStoreStatus() const { return tracker_.keyframeStoreStatus(); }
+  const KeyframeStore* keyframeStore() const { return tracker_.keyframeStore(); }
   // Runs until 'stop', or (exit_after_idle_s) until frames stopped and every keyframe is
   // acknowledged or ack_wait_s passed. Returns the exit status: 0, or 1 when keyframes
   // were left unacknowledged.

@@ -92,6 +92,44 @@ TEST_F(LocalMap, ACameraThatComesBackThawsNearestFirstWithinTheBudget) {
   EXPECT_FALSE(keyframe(1).cold()) << "the rest of the window follows on the next call";
 }
 
+// With a keyframe store, a cold keyframe's JPEG is on storage, not in memory; thawed, it
+// comes back as without one; culled, its entry goes.
+TEST_F(LocalMap, AStoreHoldsTheColdKeyframesImages) {
+  Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(::testing::TempDir());
+  ASSERT_TRUE(store) << store.error();
+  replica->setStore(store->get());
+  replica->updateLocalMap({0}, 2, 10, 90);
+  for (KeyframeId id : {1, 2}) {
+    EXPECT_TRUE(keyframe(id).cold());
+    EXPECT_TRUE(keyframe(id).cold_grey.empty()) << "in the store, not in memory";
+    EXPECT_TRUE((*store)->has(id, KeyframeStore::Kind::kImage));
+  }
+  EXPECT_GT((*store)->bytes(), 2000);
+  replica->updateLocalMap({2}, 1, 10, 90);
+  ASSERT_FALSE(keyframe(2).cold());
+  cv::Mat difference;
+  cv::absdiff(keyframe(2).grey(), originals[2], difference);
+  EXPECT_LT(cv::mean(difference)[0], 3.0) << "JPEG at quality 90";
+  const int64_t stored = (*store)->bytes();
+  replica->updateLocalMap({0}, 1, 10, 90);
+  EXPECT_TRUE(keyframe(2).cold());
+  EXPECT_EQ((*store)->bytes(), stored) << "frozen again: the stored JPEG is kept, not made again";
+  MapUpdate acked;
+  acked.version = 1;
+  acked.acked_keyframes = {0, 1, 2};
+  ASSERT_TRUE(replica->apply(acked));
+  MapUpdate cull;
+  cull.version = 2;
+  cull.removed_keyframes = {2};
+  replica->apply(cull);
+  EXPECT_FALSE((*store)->has(2, KeyframeStore::Kind::kImage)) << "a culled keyframe's entry goes";
+  EXPECT_TRUE((*store)->has(1, KeyframeStore::Kind::kImage));
+  replica->clear();
+  EXPECT_EQ((*store)->entries(), 0u);
+  EXPECT_EQ((*store)->errors(), 0);
+  replica->setStore(nullptr);  // the store goes before the fixture's replica
+}
+
 TEST_F(LocalMap, FreezingIsBoundedPerCall) {
   const LocalMapChange change = replica->updateLocalMap({}, 2, 1, 90);
   EXPECT_EQ(change.frozen, 1);

@@ -15,6 +15,10 @@ void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
           "keyframes thawed around each relocalisation candidate");
   r->bind(s, "cold_keyframe_jpeg_quality", &jpeg_quality, 1, 100, "",
           "JPEG quality of the images of keyframes outside the local map");
+  r->bindPath(s, "local_map_store_dir", &store_dir,
+              "directory on the flight computer's storage (not a RAM file system) where the images and "
+              "extras of keyframes outside the local map are kept, in an unnamed file the system removes "
+              "at exit; empty: they stay in memory");
 }
 
 LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
@@ -45,15 +49,26 @@ int MapReplica::hotKeyframes() const {
   return hot;
 }
 
+// The JPEG is made once; with a store it lives there, and the memory keeps none.
 void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
-  if (keyframe->cold_grey.empty()) keyframe->cold_grey = encodeJpeg(keyframe->grey(), jpeg_quality);
+  const bool stored = store_ && store_->has(keyframe->id, KeyframeStore::Kind::kImage);
+  if (!stored && keyframe->cold_grey.empty()) keyframe->cold_grey = encodeJpeg(keyframe->grey(), jpeg_quality);
+  if (!stored && store_ && store_->put(keyframe->id, KeyframeStore::Kind::kImage, keyframe->cold_grey)) {
+    std::vector<uint8_t>().swap(keyframe->cold_grey);
+  }
   ImagePyramid().levels.swap(keyframe->pyramid.levels);
 }
 
 bool MapReplica::thaw(Keyframe* keyframe) {
-  const Expected<cv::Mat> grey = decodeImage(keyframe->cold_grey.data(), keyframe->cold_grey.size(), 1,
-                                             camera_.width, camera_.height);
-  if (!grey) return false;  // cannot happen with bytes this process encoded; stays cold
+  std::vector<uint8_t> stored;
+  if (keyframe->cold_grey.empty() && store_) {
+    Expected<std::vector<uint8_t>> bytes = store_->get(keyframe->id, KeyframeStore::Kind::kImage);
+    if (!bytes) return false;  // the storage failed (counted by the store): stays cold
+    stored = std::move(*bytes);
+  }
+  const std::vector<uint8_t>& jpeg = stored.empty() ? keyframe->cold_grey : stored;
+  const Expected<cv::Mat> grey = decodeImage(jpeg.data(), jpeg.size(), 1, camera_.width, camera_.height);
+  if (!grey) return false;  // cannot happen with bytes this process encoded (CRC-checked); stays cold
   buildPyramid(*grey, kMaxLevels, &keyframe->pyramid);
   for (PointSlot& slot : slots_) {
     if (slot.source == keyframe) slot.patch_level = -1;  // made from the original image
@@ -74,6 +89,7 @@ Keyframe* MapReplica::addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe
 void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(map_.addPoint(point)); }
 
 void MapReplica::clear() {
+  if (store_) store_->clear();
   map_ = Map();
   acked_.clear();
   slots_.clear();
@@ -165,6 +181,7 @@ void MapReplica::removeKeyframe(KeyframeId id) {
   }
   for (PointId pid : described) removePoint(pid);
   map_.removeKeyframe(id);
+  if (store_) store_->remove(id);
 }
 
 }  // namespace rgbdslam

@@ -8,6 +8,8 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <cstring>
+#include <deque>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <unordered_map>
@@ -60,6 +62,64 @@ struct KeyframeExtras {
   Features3d features;                 // relocalisation: 52 bytes a feature, at most 500 (26 kB)
 };
 
+// A cold keyframe's extras in the keyframe store: "RGX1", the sample and feature counts
+// (uint32), then the samples, the features' points, pixels and 32-byte descriptors, each
+// as this process holds them (the store's file dies with the process).
+constexpr char kExtrasMagic[4] = {'R', 'G', 'X', '1'};
+constexpr size_t kDescriptorBytes = 32;
+
+template <typename T>
+void appendRaw(const T* data, size_t count, std::vector<uint8_t>* out) {
+  const auto* bytes = reinterpret_cast<const uint8_t*>(data);
+  out->insert(out->end(), bytes, bytes + count * sizeof(T));
+}
+
+// Nothing when the features are not as extractFeatures3d makes them (they stay in memory).
+std::optional<std::vector<uint8_t>> encodeExtras(const KeyframeExtras& extras) {
+  const Features3d& f = extras.features;
+  const bool features_ok = f.uv.size() == f.size() && f.descriptors.rows == static_cast<int>(f.size()) &&
+                           (f.size() == 0 || (f.descriptors.cols == static_cast<int>(kDescriptorBytes) &&
+                                              f.descriptors.type() == CV_8UC1 && f.descriptors.isContinuous()));
+  if (!features_ok) return std::nullopt;
+  const uint32_t counts[2] = {static_cast<uint32_t>(extras.surface.size()), static_cast<uint32_t>(f.size())};
+  std::vector<uint8_t> out;
+  appendRaw(kExtrasMagic, 4, &out);
+  appendRaw(counts, 2, &out);
+  appendRaw(extras.surface.data(), extras.surface.size(), &out);
+  if (counts[1] > 0) {
+    appendRaw(f.p.data(), f.size(), &out);
+    appendRaw(f.uv.data(), f.size(), &out);
+    appendRaw(f.descriptors.data, f.size() * kDescriptorBytes, &out);
+  }
+  return out;
+}
+
+std::optional<KeyframeExtras> decodeExtras(const std::vector<uint8_t>& bytes) {
+  uint32_t counts[2];
+  if (bytes.size() < 12 || std::memcmp(bytes.data(), kExtrasMagic, 4) != 0) return std::nullopt;
+  std::memcpy(counts, bytes.data() + 4, sizeof(counts));
+  const size_t samples = counts[0], features = counts[1];
+  const size_t expected = 12 + samples * sizeof(SurfaceSample) +
+                          features * (sizeof(Eigen::Vector3f) + sizeof(Eigen::Vector2f) + kDescriptorBytes);
+  if (bytes.size() != expected) return std::nullopt;
+  KeyframeExtras extras;
+  const uint8_t* at = bytes.data() + 12;
+  const auto take = [&at](auto* dest, size_t count) {
+    if (count == 0) return;  // an empty vector's data() may be null
+    std::memcpy(static_cast<void*>(dest), at, count * sizeof(*dest));
+    at += count * sizeof(*dest);
+  };
+  extras.surface.resize(samples);
+  take(extras.surface.data(), samples);
+  extras.features.p.resize(features);
+  extras.features.uv.resize(features);
+  take(extras.features.p.data(), features);
+  take(extras.features.uv.data(), features);
+  extras.features.descriptors.create(static_cast<int>(features), static_cast<int>(kDescriptorBytes), CV_8UC1);
+  take(extras.features.descriptors.data, features * kDescriptorBytes);
+  return extras;
+}
+
 // A fine-stage slot's search outcome, to restore an earlier attempt.
 struct SlotOutcome {
   PointSlot* slot;
@@ -87,7 +147,17 @@ class Tracker::Impl {
   Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
       : camera_(camera), options_(options), pose_options_(poseOptions(options, mode)),
         mode_(mode), map_id_(map_id), rng_(static_cast<uint32_t>(options.random_seed)),
-        replica_(camera) {}
+        replica_(camera) {
+    // Nothing goes cold without a local map, so no store either.
+    if (options.local_map.store_dir.empty() || options.local_map.keyframes <= 0) return;
+    Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(options.local_map.store_dir);
+    if (!store) {
+      store_status_ = Error{store.error() + " (tracker.local_map_store_dir; empty keeps cold keyframes in memory)"};
+      return;
+    }
+    store_ = std::move(*store);
+    replica_.setStore(store_.get());
+  }
 
   TrackResult track(const RgbdFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
@@ -107,11 +177,14 @@ class Tracker::Impl {
       for (auto it = extras_.begin(); it != extras_.end();) {
         it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
       }
+      extras_cache_.clear();
     }
     followMapCorrection();
     return known;
   }
   const Map& map() const { return replica_.map(); }
+  const KeyframeStore* keyframeStore() const { return store_.get(); }
+  const Status& keyframeStoreStatus() const { return store_status_; }
   void load(const LoadedMap& loaded, bool add_keyframes);
 
   void reset() {
@@ -124,6 +197,7 @@ class Tracker::Impl {
     last_quality_ = 0.0;
     have_previous_sbi_ = false;
     extras_.clear();
+    extras_cache_.clear();
     keyframes_allowed_ = true;
     anchor_.reset();
     offset_ = PublishedOffset{};
@@ -138,6 +212,7 @@ class Tracker::Impl {
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
   void updateLocalMap(const SE3& T_w_c, int max_thaws);
+  void storeColdExtras();
   // Per keyframe id: points of which it is the source that the last projection put in the
   // image (found or not, hot or cold source).
   std::vector<int> points_in_view_;
@@ -212,7 +287,10 @@ class Tracker::Impl {
   void holdStepAgainstMotion(TrackResult* result, int64_t utime);
   // A keyframe's extras, waiting for the worker if they are not made yet; null when the
   // keyframe has none.
-  const KeyframeExtras* extrasOf(KeyframeId id) const;
+  // In memory, or read back from the store: valid until the next call of extrasOf or
+  // updateLocalMap (which moves extras to the store).
+  const KeyframeExtras* extrasOf(KeyframeId id);
+  bool anyExtras() const;
   // Relocalisation by features (feature_relocaliser.h) against the best-ranked keyframes.
   std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame,
                                               const std::vector<RelocalisationCandidate>& ranked);
@@ -232,6 +310,10 @@ class Tracker::Impl {
   int64_t map_id_;
   std::mt19937 rng_;
 
+  // Cold keyframes' images and extras (keyframe_store.h; null: in memory), and why it is
+  // null when the options asked for one. Before the replica, which uses it.
+  std::unique_ptr<KeyframeStore> store_;
+  Status store_status_;
   // The replica and the tracker's per-point search slots.
   MapReplica replica_;
 
@@ -254,7 +336,11 @@ class Tracker::Impl {
   static constexpr double kRelocaliseRefineKeep = 0.9;
   // A point's depth record counts after this many checks at accepted poses.
   static constexpr int kDepthRecordMin = 3;
-  std::unordered_map<KeyframeId, std::shared_future<KeyframeExtras>> extras_;
+  std::unordered_map<KeyframeId, std::shared_future<KeyframeExtras>> extras_;  // hot, or not yet stored
+  // Extras read back from the store, the newest last (a relocalisation's candidates, the
+  // depth alignment's nearest keyframes): at most kExtrasCached.
+  static constexpr size_t kExtrasCached = 16;
+  std::deque<std::pair<KeyframeId, KeyframeExtras>> extras_cache_;
   // The keyframe nearest the last pose, and its pose then (map corrections are measured on it).
   struct Anchor {
     KeyframeId id;
@@ -352,6 +438,27 @@ void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
     if (static_cast<size_t>(id) >= points_in_view_.size() || points_in_view_[id] == 0) wanted.push_back(id);
   }
   replica_.updateLocalMap(wanted, max_thaws, o.changes_per_frame, o.jpeg_quality);
+  storeColdExtras();
+}
+
+// Extras of cold keyframes, once made, go to the store (they are read back when wanted).
+void Tracker::Impl::storeColdExtras() {
+  if (!store_) return;
+  for (auto it = extras_.begin(); it != extras_.end();) {
+    const Keyframe* keyframe = replica_.map().keyframe(it->first);
+    if (!keyframe || !keyframe->cold() ||
+        it->second.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+      ++it;
+      continue;
+    }
+    const std::optional<std::vector<uint8_t>> bytes = encodeExtras(it->second.get());
+    if (!bytes) {
+      ++it;
+      continue;
+    }
+    if (!store_->put(it->first, KeyframeStore::Kind::kExtras, *bytes)) return;  // full: they stay here
+    it = extras_.erase(it);
+  }
 }
 
 void Tracker::Impl::prepareFrame(const RgbdFrame& frame) {
@@ -567,7 +674,7 @@ std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, cons
 std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
                                                            const std::vector<RelocalisationCandidate>& ranked) {
   const FeatureRelocaliserOptions& o = options_.reloc_features;
-  if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || extras_.empty()) return std::nullopt;
+  if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || !anyExtras()) return std::nullopt;
   const Features3d current = extractFeatures3d(
       grey_, depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
                            options_.keyframe_build.max_depth_m),
@@ -608,7 +715,7 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
 
 bool Tracker::Impl::depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const {
   return options_.depth_align.enabled && depthInTracking(mode_) && !frame.depth.empty() &&
-         !extras_.empty() &&
+         anyExtras() &&
          (attempt.found < options_.depth_align.below_points || !poseFixed(attempt.uncertainty));
 }
 
@@ -723,9 +830,24 @@ void Tracker::Impl::updateDepthReference(const Attempt& attempt, const RgbdFrame
       T_w_c};
 }
 
-const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) const {
+const KeyframeExtras* Tracker::Impl::extrasOf(KeyframeId id) {
   const auto extras = extras_.find(id);
-  return extras == extras_.end() ? nullptr : &extras->second.get();
+  if (extras != extras_.end()) return &extras->second.get();
+  if (!store_ || !store_->has(id, KeyframeStore::Kind::kExtras)) return nullptr;
+  for (auto& [cached_id, cached] : extras_cache_) {
+    if (cached_id == id) return &cached;
+  }
+  const Expected<std::vector<uint8_t>> bytes = store_->get(id, KeyframeStore::Kind::kExtras);
+  if (!bytes) return nullptr;  // the storage failed (counted by the store)
+  std::optional<KeyframeExtras> decoded = decodeExtras(*bytes);
+  if (!decoded) return nullptr;  // cannot happen with CRC-checked bytes this process wrote
+  if (extras_cache_.size() >= kExtrasCached) extras_cache_.pop_front();  // references to the rest stay
+  extras_cache_.emplace_back(id, std::move(*decoded));
+  return &extras_cache_.back().second;
+}
+
+bool Tracker::Impl::anyExtras() const {
+  return !extras_.empty() || (store_ && store_->entries(KeyframeStore::Kind::kExtras) > 0);
 }
 
 void Tracker::Impl::setAnchor() {
@@ -1147,5 +1269,7 @@ bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update)
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }
 void Tracker::load(const LoadedMap& loaded, bool add_keyframes) { impl_->load(loaded, add_keyframes); }
+const KeyframeStore* Tracker::keyframeStore() const { return impl_->keyframeStore(); }
+const Status& Tracker::keyframeStoreStatus() const { return impl_->keyframeStoreStatus(); }
 
 }  // namespace rgbdslam

@@ -16,6 +16,7 @@ namespace rgbdslam {
 namespace {
 
 constexpr size_t kMaxNameLength = 63;  // LCM's channel name limit [bytes]
+constexpr size_t kMaxPathLength = 4095;  // PATH_MAX less its terminating zero [bytes]
 
 std::string formatDouble(double v) {
   std::ostringstream out;
@@ -85,6 +86,24 @@ void OptionRegistry::bindName(const std::string& section, const std::string& key
          if (text.empty() || text.size() > kMaxNameLength || !plain) {
            return Error{name + ": '" + text + "' must be 1 to " + std::to_string(kMaxNameLength) +
                         " letters, digits, '_', '-' or '/'"};
+         }
+         *field = text;
+         return {};
+       },
+       [=] { return *field; }});
+}
+
+void OptionRegistry::bindPath(const std::string& section, const std::string& key,
+                              std::string* field, const std::string& help) {
+  const std::string name = section + "." + key;
+  add({section, key, "path", help, "path", *field,
+       [=](const std::string& text) -> Status {
+         const bool printable = std::all_of(text.begin(), text.end(), [](char c) {
+           return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f && c != '"' && c != '\\';
+         });
+         if (text.size() > kMaxPathLength || !printable) {
+           return Error{name + ": '" + text + "' must be at most " + std::to_string(kMaxPathLength) +
+                        " printable characters other than '\"' and '\\'"};
          }
          *field = text;
          return {};
@@ -270,7 +289,8 @@ std::string OptionRegistry::yamlText() const {
     out << "\n" << section << ":\n";
     for (const auto& e : entries_) {
       if (e.section != section) continue;
-      const std::string value = e.kind == "choice" || e.kind == "name" ? "\"" + e.show() + "\"" : e.show();
+      const bool quoted = e.kind == "choice" || e.kind == "name" || e.kind == "path";
+      const std::string value = quoted ? "\"" + e.show() + "\"" : e.show();
       out << "  # " << e.help << (e.unit.empty() ? "" : " [" + e.unit + "]") << "\n";
       out << "  " << e.key << ": " << value << "\n";
     }

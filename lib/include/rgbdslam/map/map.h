@@ -39,7 +39,8 @@ struct Keyframe {
   double median_depth = 2.0;  // median depth of the points it measures [m]
   // The tracker's local map (tracking/map_replica.h): a keyframe away from the camera is
   // 'cold': no pyramid, its level-0 image kept as JPEG here, rebuilt when the camera comes
-  // back. The mapper's keyframes are never cold.
+  // back (empty while the tracker's keyframe store holds it). The mapper's keyframes are
+  // never cold.
   std::vector<uint8_t> cold_grey;
   bool cold() const { return pyramid.levels.empty(); }
 

@@ -21,7 +21,8 @@
 // Memory: every keyframe's small blurry image and pose, every point's slot, the pyramids of
 // the hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth
 // and corners once its points are made) and the JPEG of the cold ones (30-60 kB at quality
-// 90 on textured 640x480 images).
+// 90 on textured 640x480 images), unless a keyframe store (keyframe_store.h) holds those:
+// then a keyframe's JPEG is written there when it first goes cold and read back to thaw it.
 // Threads: not thread-safe; the tracker's thread owns it.
 #include <memory>
 #include <unordered_map>
@@ -31,6 +32,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/map/map.h"
 #include "rgbdslam/model/point_creation.h"
+#include "rgbdslam/tracking/keyframe_store.h"
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/util/option_registry.h"
 
@@ -42,6 +44,8 @@ struct LocalMapOptions {
   int changes_per_frame = 2;   // keyframes thawed, and frozen, per frame at most
   int relocalise_thaws = 8;    // keyframes thawed around each relocalisation candidate
   int jpeg_quality = 90;       // cold keyframes' images [1, 100]
+  // Where cold keyframes' images and extras go (keyframe_store.h); empty: they stay in memory.
+  std::string store_dir = "/var/tmp";
   void bind(OptionRegistry* registry, const std::string& section);  // as local_map_*
 };
 
@@ -53,6 +57,9 @@ struct LocalMapChange {
 class MapReplica {
  public:
   explicit MapReplica(const PinholeCamera& camera) : camera_(camera) {}
+  // Cold keyframes' JPEGs go to 'store' (owned by the caller, outliving the replica;
+  // nullptr: they stay in memory). Set before the first keyframe.
+  void setStore(KeyframeStore* store) { store_ = store; }
 
   Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe) { return map_.addKeyframe(std::move(keyframe)); }
   // A point from depth created in keyframe 'keyframe_id' and its measurement there.
@@ -82,6 +89,7 @@ class MapReplica {
   void freeze(Keyframe* keyframe, int jpeg_quality);
 
   PinholeCamera camera_;
+  KeyframeStore* store_ = nullptr;
   Map map_;
   std::unordered_set<KeyframeId> acked_;  // keyframes the mapper has acknowledged
   std::vector<PointSlot> slots_;

@@ -218,6 +218,11 @@ class Tracker {
 
   const Map& map() const;
   void reset();  // forget the map; the next frame initialises a new one
+  // The store of cold keyframes (TrackerOptions::local_map.store_dir), nullptr when there is
+  // none; its status says why when one was asked for and could not be made (the processes
+  // refuse to start then).
+  const KeyframeStore* keyframeStore() const;
+  const Status& keyframeStoreStatus() const;
 
  private:
   class Impl;

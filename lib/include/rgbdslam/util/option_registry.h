@@ -34,6 +34,11 @@ class OptionRegistry {
   // a name keeps clear of the characters that would make it match other channels).
   void bindName(const std::string& section, const std::string& key, std::string* field,
                 const std::string& help);
+  // A file or directory path: empty (the option's help says what that means) or up to
+  // 4095 printable characters other than '"' and '\' (so that the YAML the registry writes
+  // reads back); whether it exists is for its user to check.
+  void bindPath(const std::string& section, const std::string& key, std::string* field,
+                const std::string& help);
   // A string restricted to 'choices'.
   void bind(const std::string& section, const std::string& key, std::string* field,
             const std::vector<std::string>& choices, const std::string& help);
