@@ -9,6 +9,8 @@
 // the 10). BM_PlaceRecogniseOnePlace puts the copies at one pose instead: all 10 verify and
 // agree, the worst case for time. The query is a frame half-way between two keyframes.
 // For comparison, BM_SmallBlurryImageRanking ranks 1000 keyframes by ZMSSD (PTAM's way).
+// BM_RelocalisationRanking: the tracker's candidates for a lost frame, all keyframes against
+// the shortlist (tracker.relocalise_shortlist).
 //
 // --measure (before the benchmark's own flags): recall and precision on synth:flight (3 min,
 // a keyframe every 10 frames), the bag against small blurry images; see measurePlaces().
@@ -26,6 +28,7 @@
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/mapping/place_recognition.h"
 #include "rgbdslam/synth/scene.h"
+#include "rgbdslam/tracking/relocaliser.h"
 
 namespace {
 
@@ -256,6 +259,44 @@ void BM_SmallBlurryImageRanking(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SmallBlurryImageRanking)->Arg(1000)->Unit(benchmark::kMillisecond);
+
+// The tracker's ranking of a lost frame (relocaliser.h), the part that grows with the map:
+// the small blurry images aligned to every keyframe (PTAM's way; arg 1 = 0), or the
+// shortlist of 30 (the 15 nearest the last pose, the rest by bag of words) aligned only
+// (arg 1 = 1; includes the query's bag). The query frame's ORB extraction (4-6 ms) and the
+// tracking attempts from the candidates do not grow with the map and are not included.
+// Target (issue 11): relocalisation within 30 ms at 1000 keyframes.
+void BM_RelocalisationRanking(benchmark::State& state) {
+  const std::vector<RenderedPlace>& places = benchPlaces();
+  const RenderedPlace& query = benchQuery();
+  const size_t n = static_cast<size_t>(state.range(0));
+  const bool shortlisted = state.range(1) != 0;
+  Map map;
+  BowIndex index;
+  for (size_t i = 0; i < n; ++i) {
+    const RenderedPlace& p = places[i % places.size()];
+    auto keyframe = std::make_unique<Keyframe>();
+    keyframe->id = static_cast<KeyframeId>(i);
+    keyframe->T_w_c = SE3(p.T_w_c.rotation(), p.T_w_c.translation() + Vec3(50.0 * static_cast<double>(i / places.size()), 0, 0));
+    keyframe->sbi = p.sbi;
+    map.addKeyframe(std::move(keyframe));
+    index.add(static_cast<int>(i), projectVocabulary().bag(p.features.descriptors));
+  }
+  const SE3 last = places.back().T_w_c;  // the last good pose: elsewhere in the flight
+  for (auto _ : state) {
+    if (shortlisted) {
+      std::vector<KeyframeId> by_words;
+      const std::vector<KeyframeId> shortlist = relocalisationShortlist(
+          map, index, projectVocabulary().bag(query.features.descriptors), last, 30, 4, &by_words);
+      benchmark::DoNotOptimize(relocalisationCandidates(map, query.sbi, benchCamera(), 4, &shortlist));
+    } else {
+      benchmark::DoNotOptimize(relocalisationCandidates(map, query.sbi, benchCamera(), 4));
+    }
+  }
+  state.counters["index_kB"] = static_cast<double>(index.bytes()) / 1024.0;
+}
+BENCHMARK(BM_RelocalisationRanking)
+    ->Args({100, 0})->Args({100, 1})->Args({1000, 0})->Args({1000, 1})->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

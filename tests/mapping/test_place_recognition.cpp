@@ -232,5 +232,42 @@ TEST(BinaryVocabulary, TrainsDeterministicallyAndScoresBags) {
   EXPECT_TRUE(project.bag(cv::Mat()).empty());
 }
 
+// The inverted index scores as BinaryVocabulary::score does, ranks by score then id, skips
+// excluded and removed images, and refuses a second add of one id.
+TEST(BowIndex, RanksLikeTheBagScoreAndForgetsRemovedImages) {
+  const BowVector a{{1, 0.5f}, {4, 0.5f}};
+  const BowVector b{{1, 0.25f}, {2, 0.25f}, {4, 0.5f}};
+  const BowVector c{{7, 1.0f}};
+  const BowVector query{{1, 0.5f}, {4, 0.25f}, {9, 0.25f}};
+  BowIndex index;
+  EXPECT_TRUE(index.add(3, a));
+  EXPECT_TRUE(index.add(8, b));
+  EXPECT_TRUE(index.add(5, c));
+  EXPECT_FALSE(index.add(8, a));
+  EXPECT_FALSE(index.add(-1, a));
+  EXPECT_EQ(index.size(), 3u);
+  std::vector<BowIndex::Hit> hits = index.query(query, 10);
+  ASSERT_EQ(hits.size(), 2u);  // image 5 shares no word
+  EXPECT_EQ(hits[0].image, 3);
+  EXPECT_NEAR(hits[0].score, BinaryVocabulary::score(query, a), 1e-6);
+  EXPECT_EQ(hits[1].image, 8);
+  EXPECT_NEAR(hits[1].score, BinaryVocabulary::score(query, b), 1e-6);
+  EXPECT_EQ(index.query(query, 1).size(), 1u);
+  hits = index.query(query, 10, [](int image) { return image == 3; });
+  ASSERT_EQ(hits.size(), 1u);
+  EXPECT_EQ(hits[0].image, 8);
+  EXPECT_TRUE(index.add(2, a));  // the same bag as image 3: the tie goes to the smaller id
+  EXPECT_EQ(index.query(query, 1)[0].image, 2);
+  EXPECT_TRUE(index.remove(2));
+  EXPECT_TRUE(index.remove(3));
+  EXPECT_FALSE(index.remove(3));
+  EXPECT_FALSE(index.contains(3));
+  hits = index.query(query, 10);
+  ASSERT_EQ(hits.size(), 1u);
+  EXPECT_EQ(hits[0].image, 8);
+  EXPECT_TRUE(index.query(BowVector{}, 10).empty());
+  EXPECT_GT(index.bytes(), 0u);
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -205,4 +205,61 @@ const BinaryVocabulary& projectVocabulary() {
   return vocabulary;
 }
 
+bool BowIndex::add(int image, const BowVector& bag) {
+  if (image < 0 || contains(image)) return false;
+  if (static_cast<size_t>(image) >= indexed_.size()) indexed_.resize(static_cast<size_t>(image) + 1, 0);
+  indexed_[static_cast<size_t>(image)] = 1;
+  ++images_;
+  for (const auto& [word, weight] : bag) {
+    if (word < 0) continue;
+    if (static_cast<size_t>(word) >= inverted_.size()) inverted_.resize(static_cast<size_t>(word) + 1);
+    inverted_[static_cast<size_t>(word)].push_back({image, weight});
+  }
+  return true;
+}
+
+bool BowIndex::remove(int image) {
+  if (!contains(image)) return false;
+  indexed_[static_cast<size_t>(image)] = 0;
+  --images_;
+  for (std::vector<Posting>& postings : inverted_) {
+    postings.erase(std::remove_if(postings.begin(), postings.end(),
+                                  [image](const Posting& p) { return p.image == image; }),
+                   postings.end());
+  }
+  return true;
+}
+
+bool BowIndex::contains(int image) const {
+  return image >= 0 && static_cast<size_t>(image) < indexed_.size() && indexed_[static_cast<size_t>(image)];
+}
+
+size_t BowIndex::bytes() const {
+  size_t bytes = indexed_.capacity() + inverted_.capacity() * sizeof(std::vector<Posting>);
+  for (const std::vector<Posting>& postings : inverted_) bytes += postings.capacity() * sizeof(Posting);
+  return bytes;
+}
+
+std::vector<BowIndex::Hit> BowIndex::query(const BowVector& bag, size_t n,
+                                           const std::function<bool(int)>& excluded) const {
+  // For L1-normalised bags the score is the sum over shared words of the smaller weight.
+  std::vector<double> scores(indexed_.size(), 0.0);
+  for (const auto& [word, weight] : bag) {
+    if (word < 0 || static_cast<size_t>(word) >= inverted_.size()) continue;
+    for (const Posting& posting : inverted_[static_cast<size_t>(word)]) {
+      scores[static_cast<size_t>(posting.image)] += std::min(weight, posting.weight);
+    }
+  }
+  std::vector<Hit> hits;
+  for (size_t i = 0; i < scores.size(); ++i) {
+    const int image = static_cast<int>(i);
+    if (scores[i] > 0.0 && !(excluded && excluded(image))) hits.push_back({image, scores[i]});
+  }
+  const size_t keep = std::min(hits.size(), n);
+  std::partial_sort(hits.begin(), hits.begin() + static_cast<std::ptrdiff_t>(keep), hits.end(),
+                    [](const Hit& a, const Hit& b) { return a.score > b.score || (a.score == b.score && a.image < b.image); });
+  hits.resize(keep);
+  return hits;
+}
+
 }  // namespace rgbdslam

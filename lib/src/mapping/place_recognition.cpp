@@ -99,23 +99,20 @@ bool PlaceExclusion::excludes(KeyframeId id) const {
 
 PlaceDatabase::PlaceDatabase(const PinholeCamera& camera, const PlaceRecognitionOptions& options,
                              const BinaryVocabulary* vocabulary)
-    : camera_(camera), options_(options), vocabulary_(vocabulary ? vocabulary : &projectVocabulary()) {
-  inverted_.resize(static_cast<size_t>(vocabulary_->words()));
-}
+    : camera_(camera), options_(options), vocabulary_(vocabulary ? vocabulary : &projectVocabulary()) {}
 
 void PlaceDatabase::add(KeyframeId id, const SE3& T_w_k, Features3d features) {
   assert(entries_.empty() || id > entries_.back().id);
   Entry entry;
   entry.id = id;
   entry.T_w_k = T_w_k;
-  entry.bag = vocabulary_->bag(features.descriptors);
+  const BowVector bag = vocabulary_->bag(features.descriptors);
   entry.features = std::move(features);
   if (!entries_.empty()) {
     const Entry& last = entries_.back();
     entry.path_m = last.path_m + (T_w_k.translation() - last.T_w_k.translation()).norm();
   }
-  const int index = static_cast<int>(entries_.size());
-  for (const auto& [word, weight] : entry.bag) inverted_[static_cast<size_t>(word)].push_back({index, weight});
+  index_.add(static_cast<int>(entries_.size()), bag);
   entries_.push_back(std::move(entry));
 }
 
@@ -130,15 +127,8 @@ bool PlaceDatabase::remove(KeyframeId id) {
   const Entry* found = find(id);
   if (!found) return false;
   const int index = static_cast<int>(found - entries_.data());
-  Entry& entry = entries_[static_cast<size_t>(index)];
-  for (const auto& [word, weight] : entry.bag) {
-    std::vector<Posting>& postings = inverted_[static_cast<size_t>(word)];
-    postings.erase(std::remove_if(postings.begin(), postings.end(),
-                                  [index](const Posting& p) { return p.entry == index; }),
-                   postings.end());
-  }
-  entry.bag = BowVector{};
-  entry.features = Features3d{};
+  index_.remove(index);
+  entries_[static_cast<size_t>(index)].features = Features3d{};
   return true;
 }
 
@@ -149,24 +139,12 @@ const PlaceDatabase::Entry* PlaceDatabase::find(KeyframeId id) const {
 }
 
 std::vector<PlaceCandidate> PlaceDatabase::query(const Features3d& features, const PlaceExclusion& exclusion) const {
-  // Scores through the inverted index: sum over shared words of min(weight in query, in keyframe).
-  const BowVector bag = vocabulary_->bag(features.descriptors);
-  std::vector<double> scores(entries_.size(), 0.0);
-  for (const auto& [word, weight] : bag) {
-    for (const Posting& posting : inverted_[static_cast<size_t>(word)]) {
-      scores[static_cast<size_t>(posting.entry)] += std::min(weight, posting.weight);
-    }
-  }
+  // Entries are the index's images; their ids increase with them, so ties still go to the older.
+  const std::vector<BowIndex::Hit> hits =
+      index_.query(vocabulary_->bag(features.descriptors), static_cast<size_t>(options_.candidates),
+                   [&](int entry) { return exclusion.excludes(entries_[static_cast<size_t>(entry)].id); });
   std::vector<PlaceCandidate> ranked;
-  for (size_t i = 0; i < entries_.size(); ++i) {
-    if (scores[i] > 0.0 && !exclusion.excludes(entries_[i].id)) ranked.push_back({entries_[i].id, scores[i]});
-  }
-  const size_t keep = std::min(ranked.size(), static_cast<size_t>(options_.candidates));
-  std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(keep), ranked.end(),
-                    [](const PlaceCandidate& a, const PlaceCandidate& b) {
-                      return a.score > b.score || (a.score == b.score && a.keyframe < b.keyframe);
-                    });
-  ranked.resize(keep);
+  for (const BowIndex::Hit& hit : hits) ranked.push_back({entries_[static_cast<size_t>(hit.image)].id, hit.score});
   if (!ranked.empty()) {
     const double floor = options_.min_score_ratio * ranked.front().score;
     ranked.erase(std::remove_if(ranked.begin(), ranked.end(), [floor](const PlaceCandidate& c) { return c.score < floor; }),

@@ -5,11 +5,14 @@
 #include "rgbdslam/tracking/feature_relocaliser.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <future>
+#include <malloc.h>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <unordered_map>
@@ -17,6 +20,7 @@
 
 #include "rgbdslam/image/corners.h"
 #include "rgbdslam/image/small_blurry_image.h"
+#include "rgbdslam/mapping/binary_vocabulary.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/map_replica.h"
 #include "rgbdslam/tracking/point_projection.h"
@@ -60,6 +64,9 @@ struct Attempt {
 struct KeyframeExtras {
   std::vector<SurfaceSample> surface;  // depth-aided tracking: 32 bytes a sample, at most 1200 (38 kB)
   Features3d features;                 // relocalisation: 52 bytes a feature, at most 500 (26 kB)
+  // The features' bag of words, made with them once the vocabulary is trained (else when
+  // the keyframe is indexed); not stored with cold extras (the index holds it).
+  std::optional<BowVector> bag;
 };
 
 // A cold keyframe's extras in the keyframe store: "RGX1", the sample and feature counts
@@ -178,6 +185,9 @@ class Tracker::Impl {
         it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
       }
       extras_cache_.clear();
+      for (KeyframeId id : update.removed_keyframes) {
+        if (id >= 0 && id <= INT_MAX) bow_index_.remove(static_cast<int>(id));
+      }
     }
     followMapCorrection();
     return known;
@@ -198,6 +208,7 @@ class Tracker::Impl {
     have_previous_sbi_ = false;
     extras_.clear();
     extras_cache_.clear();
+    bow_index_ = BowIndex{};
     keyframes_allowed_ = true;
     anchor_.reset();
     offset_ = PublishedOffset{};
@@ -291,9 +302,21 @@ class Tracker::Impl {
   // updateLocalMap (which moves extras to the store).
   const KeyframeExtras* extrasOf(KeyframeId id);
   bool anyExtras() const;
-  // Relocalisation by features (feature_relocaliser.h) against the best-ranked keyframes.
-  std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame,
-                                              const std::vector<RelocalisationCandidate>& ranked);
+  // Relocalisation by features (feature_relocaliser.h) against 'candidates', best first;
+  // '*features' holds the frame's ORB features once extracted (here, if not yet).
+  std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame, const std::vector<KeyframeId>& candidates,
+                                              std::optional<Features3d>* features);
+  Features3d frameFeatures(const RgbdFrame& frame) const;
+  // Whether a lost frame is compared with a shortlist only (TrackerOptions::relocalise_shortlist).
+  bool shortlisted() const;
+  // The shortlist: the keyframes nearest the last pose, then the best by bag of words; the
+  // feature relocaliser's candidates (the bag's best) go to '*by_words'.
+  std::vector<KeyframeId> relocalisationShortlist(const Features3d& features, std::vector<KeyframeId>* by_words);
+  // Adds the keyframes missing from the bag-of-words index (their extras read back if cold).
+  void indexBags();
+  void indexBag(KeyframeId id, const KeyframeExtras& extras);
+  // Trains the project's vocabulary on a thread of its own (depth modes with reloc_features; once).
+  void warmUpVocabulary();
   int cornerCount() const;  // FAST corners of this frame, all levels
   std::string lossReason(const Attempt& attempt) const;
   // The pose fit's options: depth residuals only where the mode tracks with depth.
@@ -341,6 +364,14 @@ class Tracker::Impl {
   // depth alignment's nearest keyframes): at most kExtrasCached.
   static constexpr size_t kExtrasCached = 16;
   std::deque<std::pair<KeyframeId, KeyframeExtras>> extras_cache_;
+  // Every keyframe's bag of words, for the relocalisation shortlist (indexed when its extras
+  // go cold, or at the first loss on a large map). The vocabulary is trained on a thread of
+  // its own (~1.5 s, once per process) once the map has half the shortlist's keyframes, so
+  // that the first loss does not wait for it (a loss before it is done waits, once);
+  // vocabulary_ready_ tells the keyframe worker.
+  BowIndex bow_index_;
+  std::future<void> vocabulary_warmup_;
+  std::shared_ptr<std::atomic<bool>> vocabulary_ready_ = std::make_shared<std::atomic<bool>>(false);
   // The keyframe nearest the last pose, and its pose then (map corrections are measured on it).
   struct Anchor {
     KeyframeId id;
@@ -451,6 +482,8 @@ void Tracker::Impl::storeColdExtras() {
       ++it;
       continue;
     }
+    // The bag only if made already (the vocabulary ready): else at the first loss that needs it.
+    if (it->second.get().bag) indexBag(it->first, it->second.get());
     const std::optional<std::vector<uint8_t>> bytes = encodeExtras(it->second.get());
     if (!bytes) {
       ++it;
@@ -528,6 +561,8 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
 // keyframes whose small blurry images are most like the frame's.
 void Tracker::Impl::load(const LoadedMap& loaded, bool add_keyframes) {
   reset();
+  // A large map starts lost on its shortlist: the vocabulary from the start.
+  if (2 * loaded.keyframes.size() >= static_cast<size_t>(options_.relocalise_shortlist)) warmUpVocabulary();
   for (size_t i = 0; i < loaded.keyframes.size(); ++i) {
     std::unique_ptr<Keyframe> keyframe = loaded.buildKeyframe(i, options_.keyframe_build);
     rememberKeyframe(*keyframe);
@@ -586,8 +621,18 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
 }
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
-  const std::vector<RelocalisationCandidate> ranked = relocalisationCandidates(
-      replica_.map(), sbi_, camera_, std::max(options_.relocalise_candidates, options_.reloc_features.candidates));
+  const int wanted = std::max(options_.relocalise_candidates, options_.reloc_features.candidates);
+  std::optional<Features3d> features;       // the frame's ORB features, extracted at most once
+  std::vector<KeyframeId> feature_candidates;
+  std::vector<RelocalisationCandidate> ranked;
+  if (shortlisted()) {
+    features = frameFeatures(frame);
+    const std::vector<KeyframeId> shortlist = relocalisationShortlist(*features, &feature_candidates);
+    ranked = relocalisationCandidates(replica_.map(), sbi_, camera_, wanted, &shortlist);
+  } else {
+    ranked = relocalisationCandidates(replica_.map(), sbi_, camera_, wanted);
+    for (const RelocalisationCandidate& candidate : ranked) feature_candidates.push_back(candidate.keyframe);
+  }
   std::vector<RelocalisationCandidate> candidates(
       ranked.begin(), ranked.begin() + std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(ranked.size()),
                                                                options_.relocalise_candidates));
@@ -617,7 +662,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
-  if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, ranked)) {
+  if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, feature_candidates, &features)) {
     velocity_.setZero();
     return accept(*attempt, frame, TrackingState::kRelocalised);
   }
@@ -671,17 +716,50 @@ std::optional<Attempt> Tracker::Impl::retryConsistent(const SE3& predicted, cons
   return std::nullopt;
 }
 
+Features3d Tracker::Impl::frameFeatures(const RgbdFrame& frame) const {
+  if (frame.depth.empty()) return Features3d{};
+  return extractFeatures3d(grey_,
+                           depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
+                                         options_.keyframe_build.max_depth_m),
+                           camera_, options_.reloc_features);
+}
+
+bool Tracker::Impl::shortlisted() const {
+  return options_.reloc_features.enabled && depthInTracking(mode_) &&
+         replica_.map().numKeyframes() > static_cast<size_t>(options_.relocalise_shortlist);
+}
+
+std::vector<KeyframeId> Tracker::Impl::relocalisationShortlist(const Features3d& features,
+                                                               std::vector<KeyframeId>* by_words) {
+  if (features.size() > 0) indexBags();
+  const BowVector bag = features.size() > 0 ? projectVocabulary().bag(features.descriptors) : BowVector{};
+  return rgbdslam::relocalisationShortlist(replica_.map(), bow_index_, bag, T_c_w_.inverse(),
+                                           static_cast<size_t>(options_.relocalise_shortlist),
+                                           static_cast<size_t>(options_.reloc_features.candidates), by_words);
+}
+
+void Tracker::Impl::indexBags() {
+  for (const auto& [id, keyframe] : replica_.map().keyframes()) {
+    if (id < 0 || id > INT_MAX || bow_index_.contains(static_cast<int>(id))) continue;
+    if (const KeyframeExtras* extras = extrasOf(id)) indexBag(id, *extras);
+  }
+}
+
+void Tracker::Impl::indexBag(KeyframeId id, const KeyframeExtras& extras) {
+  if (id < 0 || id > INT_MAX || bow_index_.contains(static_cast<int>(id))) return;
+  bow_index_.add(static_cast<int>(id), extras.bag ? *extras.bag : projectVocabulary().bag(extras.features.descriptors));
+}
+
 std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
-                                                           const std::vector<RelocalisationCandidate>& ranked) {
+                                                           const std::vector<KeyframeId>& candidates,
+                                                           std::optional<Features3d>* features) {
   const FeatureRelocaliserOptions& o = options_.reloc_features;
   if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || !anyExtras()) return std::nullopt;
-  const Features3d current = extractFeatures3d(
-      grey_, depthToMetres(frame.depth, frame.depth_scale, options_.keyframe_build.min_depth_m,
-                           options_.keyframe_build.max_depth_m),
-      camera_, o);
-  for (size_t k = 0; k < ranked.size() && k < static_cast<size_t>(o.candidates); ++k) {
-    const KeyframeExtras* extras = extrasOf(ranked[k].keyframe);
-    const Keyframe* keyframe = replica_.map().keyframe(ranked[k].keyframe);
+  if (!*features) *features = frameFeatures(frame);
+  const Features3d& current = **features;
+  for (size_t k = 0; k < candidates.size() && k < static_cast<size_t>(o.candidates); ++k) {
+    const KeyframeExtras* extras = extrasOf(candidates[k]);
+    const Keyframe* keyframe = replica_.map().keyframe(candidates[k]);
     if (!extras || !keyframe) continue;
     const std::optional<FeaturePose> pose =
         poseFromFeatures(current, extras->features, keyframe->T_w_c, camera_, pose_options_, o);
@@ -797,14 +875,29 @@ void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
   if (!options_.depth_align.enabled && !options_.reloc_features.enabled) return;
   // The job owns what it reads: the images' buffers (shared, never written again) and copies
   // of the options, so that neither the keyframe nor an option change can reach it.
+  if (2 * (replica_.map().numKeyframes() + 1) >= static_cast<size_t>(options_.relocalise_shortlist)) {
+    warmUpVocabulary();
+  }
   extras_[keyframe.id] = keyframe_worker_.submit(
       [depth = keyframe.depth, grey = keyframe.grey(), camera = camera_, noise = options_.pose.noise,
-       align = options_.depth_align, features = options_.reloc_features] {
+       align = options_.depth_align, features = options_.reloc_features, ready = vocabulary_ready_] {
         KeyframeExtras extras;
         if (align.enabled) extras.surface = sampleSurface(depth, camera, noise, align);
         if (features.enabled) extras.features = extractFeatures3d(grey, depth, camera, features);
+        if (features.enabled && ready->load()) extras.bag = projectVocabulary().bag(extras.features.descriptors);
         return extras;
       });
+}
+
+void Tracker::Impl::warmUpVocabulary() {
+  if (!options_.reloc_features.enabled || !depthInTracking(mode_) || vocabulary_warmup_.valid()) return;
+  vocabulary_warmup_ = std::async(std::launch::async, [ready = vocabulary_ready_] {
+    projectVocabulary();
+    ready->store(true);
+    // The training's frames (~20 MB) are freed by now: give what malloc keeps of them back
+    // to the system (every arena; once per tracker, off the frame path).
+    malloc_trim(0);
+  });
 }
 
 // A new reference once the camera has moved on from the last one; none once the points hold

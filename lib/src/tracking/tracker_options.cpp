@@ -90,6 +90,9 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "keyframe 0 needs this many points from depth");
   r->bind(s, "relocalise_candidates", &relocalise_candidates, 1, 100, "keyframes",
           "most similar keyframes tried per frame when lost");
+  r->bind(s, "relocalise_shortlist", &relocalise_shortlist, 2, 100000, "keyframes",
+          "above this many keyframes a lost frame is compared only with this many: the nearest "
+          "and the best by bag of words (depth modes)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   photometric.bind(r, s);

@@ -179,18 +179,13 @@ class PlaceDatabase {
     KeyframeId id = -1;
     SE3 T_w_k;
     Features3d features;
-    BowVector bag;
     double path_m = 0.0;  // length of the path through the keyframes added up to this one
-  };
-  struct Posting {
-    int entry = 0;
-    float weight = 0.f;
   };
   PinholeCamera camera_;
   PlaceRecognitionOptions options_;
   const BinaryVocabulary* vocabulary_;
   std::vector<Entry> entries_;
-  std::vector<std::vector<Posting>> inverted_;  // per word: the keyframes that have it
+  BowIndex index_;              // the entries' bags (images: indices into entries_)
 
   const Entry* find(KeyframeId id) const;
   bool withinDrift(const Entry& keyframe, const SE3& T_w_q_estimate, const SE3& T_w_q) const;

@@ -7,7 +7,8 @@
 // plain ZMSSD first; with keyframes several degrees apart that ranking is nearly random.)
 // Cost: 0.23 ms per keyframe (up to 10 ESM iterations on 40x30 images; measured on the
 // flight: 19 ms per lost frame with 83 keyframes), so it grows with the map: a long flight
-// needs an index (place recognition's words) in front of it (docs/open_work.md).
+// needs an index in front of it: above tracker.relocalise_shortlist keyframes the tracker
+// aligns only a shortlist, chosen by the bag of words and by distance (tracker.h).
 // Call order: relocalisationCandidates(map, sbi, camera, n) -> try each pose in order.
 // Frames: T_w_c camera to world.
 #include <vector>
@@ -15,6 +16,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/mapping/binary_vocabulary.h"
 
 namespace rgbdslam {
 
@@ -24,10 +26,22 @@ struct RelocalisationCandidate {
   SE3 T_w_c;           // the keyframe's pose turned by the SBI rotation
 };
 
-// The n keyframes most similar to 'sbi', best first, with their candidate poses.
+// The n keyframes most similar to 'sbi', best first, with their candidate poses: among all
+// the map's keyframes, or only among 'among' (ids not in the map are skipped), which bounds
+// the cost on a large map (the tracker's shortlist: tracker.h, relocalise_shortlist).
 std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
                                                               const SmallBlurryImage& sbi,
                                                               const PinholeCamera& camera,
-                                                              int n);
+                                                              int n,
+                                                              const std::vector<KeyframeId>* among = nullptr);
+
+// A lost frame's shortlist on a large map (tracker.relocalise_shortlist = n): the n / 2
+// keyframes nearest 'T_w_last' (the last good pose: a short disturbance), then the best by
+// bag of words over all keyframes in 'index' (images = keyframe ids; ids not in the map are
+// skipped) up to n in all. The bag's best 'by_words_wanted' go to '*by_words' as well (the
+// feature relocaliser's candidates; may be null). 'bag' empty (no features): the nearest only.
+std::vector<KeyframeId> relocalisationShortlist(const Map& map, const BowIndex& index, const BowVector& bag,
+                                                const SE3& T_w_last, size_t n, size_t by_words_wanted,
+                                                std::vector<KeyframeId>* by_words);
 
 }  // namespace rgbdslam

@@ -144,6 +144,14 @@ struct TrackerOptions {
   int init_min_points = 20;        // keyframe 0 needs this many points from depth, and they
                                    // must fix its pose (quality.max_pose_sigma_*)
   int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
+  // A lost frame's small blurry image is aligned to every keyframe's (0.23 ms each), which
+  // outgrows a frame's 33 ms at ~140 keyframes. Above this many keyframes (depth modes with
+  // reloc_features) it is aligned only to a shortlist of this many: the keyframes nearest
+  // the last pose (half) and the best by bag of words over all keyframes (the rest; the
+  // lost frame's ORB features, binary_vocabulary.h), and the feature relocaliser's
+  // candidates come from the bag too (it ranks views from other directions better:
+  // place_recognition.h). Below it, and in mono, all keyframes by small blurry image.
+  int relocalise_shortlist = 30;   // [keyframes]
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
   PhotometricIntegrityOptions photometric;  // every pose against the image (every mode)
