@@ -4,11 +4,11 @@
 # moves away, so PTAM's keyframe views alone leave 240 of 340 frames without a pose), and the
 # camera carried elsewhere under a hand for 5 s (frames 100-249 covered: dark, no depth).
 # Both must recover through the ORB features with depth (feature_relocaliser.h).
-# Measured 2026-11-25: gap 339/340 posed, ATE 1.90 mm; cover 5 s 213/250 uncovered frames
+# Measured 2026-11-25: gap 339/340 posed, ATE 1.88 mm; cover 5 s 213/250 uncovered frames
 # posed (relocalised at frame 287), ATE 4.8 mm.
 # Both again with the shortlist of a large map forced on (tracker.relocalise_shortlist=4 < the
 # room's 8-13 keyframes: candidates by bag of words and distance, relocaliser.h). Measured
-# 2026-11-25: gap the same (339/340, 1.90 mm); cover 233/250 posed (back at frame 267), ATE 3.4 mm.
+# 2026-11-25: gap the same (339/340, 1.88 mm); cover 233/250 posed (back at frame 267), ATE 3.4 mm.
 source "$(dirname "$0")/common.sh"
 
 run() {  # run NAME SPEC [rgbd-slam options]

@@ -202,6 +202,8 @@ class Tracker::Impl {
     state_ = TrackingState::kInitialising;
     T_c_w_ = SE3();
     velocity_.setZero();
+    lost_velocity_.setZero();
+    lost_frames_ = 0;
     frames_since_keyframe_ = 0;
     next_keyframe_id_ = 0;
     last_quality_ = 0.0;
@@ -344,6 +346,10 @@ class Tracker::Impl {
   TrackingState state_ = TrackingState::kInitialising;
   SE3 T_c_w_;          // last good pose
   Vec6 velocity_ = Vec6::Zero();  // log of the last inter-frame motion (left, on T_c_w)
+  // While lost: the velocity when tracking was lost, and the frames lost since (a vehicle
+  // does not stop when its tracker loses it: relocalise() tries where it coasted to).
+  Vec6 lost_velocity_ = Vec6::Zero();
+  int lost_frames_ = 0;
   int frames_since_keyframe_ = 0;
   KeyframeId next_keyframe_id_ = 0;
   bool keyframes_allowed_ = true;  // false: localise in a loaded map, add nothing to it
@@ -637,6 +643,13 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
       ranked.begin(), ranked.begin() + std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(ranked.size()),
                                                                options_.relocalise_candidates));
   // The last good pose first: after a short disturbance the camera is often still near it.
+  // Then, for TrackerOptions::relocalise_coast_frames, where the velocity at the loss
+  // carried it since (tried as a pose near the last one: fine stage first, dodgy is enough).
+  ++lost_frames_;
+  if (!lost_velocity_.isZero() && lost_frames_ <= options_.relocalise_coast_frames) {
+    const SE3 coasted = SE3::exp(static_cast<double>(lost_frames_) * lost_velocity_) * T_c_w_;
+    candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, coasted.inverse()});
+  }
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
   for (const RelocalisationCandidate& candidate : candidates) {
     const bool near_last = candidate.keyframe < 0;
@@ -1058,6 +1071,8 @@ std::string Tracker::Impl::lossReason(const Attempt& attempt) const {
 
 TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason, bool inconsistent) {
   state_ = TrackingState::kLost;
+  lost_velocity_ = velocity_;
+  lost_frames_ = 0;
   velocity_.setZero();
   last_quality_ = 0.0;
   depth_reference_.reset();

@@ -93,6 +93,9 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_shortlist", &relocalise_shortlist, 2, 100000, "keyframes",
           "above this many keyframes a lost frame is compared only with this many: the nearest "
           "and the best by bag of words (depth modes)");
+  r->bind(s, "relocalise_coast_frames", &relocalise_coast_frames, 0, 1000, "frames",
+          "for this many frames after a loss also try the pose the last velocity carried the camera to "
+          "(0: the last pose only)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   photometric.bind(r, s);
