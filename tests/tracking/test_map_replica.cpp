@@ -136,6 +136,22 @@ TEST_F(LocalMap, FreezingIsBoundedPerCall) {
   EXPECT_EQ(replica->hotKeyframes(), 2);
 }
 
+// A lost tracker thaws around one relocalisation candidate after another: each call freezes
+// at least as many as it thawed, so the hot set does not grow with the candidates tried.
+TEST_F(LocalMap, ThawingForOneCandidateAfterAnotherKeepsTheHotSetBounded) {
+  replica->updateLocalMap({0}, 0, 10, 90);
+  ASSERT_EQ(replica->hotKeyframes(), 1);
+  for (int round = 0; round < 3; ++round) {
+    for (const std::vector<KeyframeId>& around : {std::vector<KeyframeId>{1, 2}, std::vector<KeyframeId>{0}}) {
+      const LocalMapChange change = replica->updateLocalMap(around, 8, 1, 90);
+      EXPECT_EQ(change.thawed, static_cast<int>(around.size()));
+      EXPECT_EQ(replica->hotKeyframes(), static_cast<int>(around.size()))
+          << "with only max_freezes (1) going back the hot set would grow";
+      for (KeyframeId id : around) EXPECT_FALSE(keyframe(id).cold());
+    }
+  }
+}
+
 // The mapper culled keyframe 1 (a delta names it): point 101, which it described, comes
 // re-described by keyframe 2 and keeps a slot; the keyframe and its measurements go.
 TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {

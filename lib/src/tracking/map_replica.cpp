@@ -34,11 +34,15 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
     }
   }
   if (max_freezes <= 0) return change;
+  // At least as many frozen as thawed: a lost tracker thaws around every relocalisation
+  // candidate (8 each, several candidates a frame), and with only max_freezes going back the
+  // hot set grew to 117 of a window of 40 on the flight (+35 MB of pyramids).
+  const int freezes = max_freezes + change.thawed;
   const std::unordered_set<KeyframeId> keep(wanted.begin(), wanted.end());
   for (const auto& [id, keyframe] : map_.keyframes()) {
     if (keyframe->cold() || keep.count(id)) continue;
     freeze(keyframe.get(), jpeg_quality);
-    if (++change.frozen >= max_freezes) break;
+    if (++change.frozen >= freezes) break;
   }
   return change;
 }

@@ -78,7 +78,7 @@ class MapReplica {
   bool apply(const MapUpdate& update);
   void clear();
   // Thaws the cold keyframes of 'wanted' (nearest first; at most max_thaws) and freezes hot
-  // keyframes not in it (at most max_freezes).
+  // keyframes not in it (at most max_freezes plus as many as were thawed).
   LocalMapChange updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
                                 int max_freezes, int jpeg_quality);
   int hotKeyframes() const;
