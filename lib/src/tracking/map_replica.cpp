@@ -10,7 +10,8 @@ void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
           "keyframes that keep their image pyramid: the nearest to the camera; the others keep "
           "a JPEG and their points are not searched until the camera comes back (0: all)");
   r->bind(s, "local_map_changes_per_frame", &changes_per_frame, 1, 1000, "keyframes",
-          "keyframes thawed (JPEG decoded, pyramid built: ~2 ms each) and frozen per frame at most");
+          "keyframes thawed (JPEG decoded, pyramid built: ~2 ms each) per frame at most; as many are "
+          "frozen, plus as many as were thawed (relocalisation thaws more)");
   r->bind(s, "local_map_relocalise_thaws", &relocalise_thaws, 0, 1000, "keyframes",
           "keyframes thawed around each relocalisation candidate");
   r->bind(s, "cold_keyframe_jpeg_quality", &jpeg_quality, 1, 100, "",

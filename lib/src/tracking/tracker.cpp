@@ -1072,7 +1072,7 @@ std::string Tracker::Impl::lossReason(const Attempt& attempt) const {
 TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason, bool inconsistent) {
   state_ = TrackingState::kLost;
   lost_velocity_ = velocity_;
-  lost_frames_ = 0;
+  lost_frames_ = 1;  // this frame: the first relocalisation is two frames past the last pose
   velocity_.setZero();
   last_quality_ = 0.0;
   depth_reference_.reset();

@@ -47,7 +47,8 @@ struct LocalMapOptions {
   // (35.8), every frame posed; the room, teddy, office and the first 720 frames of the
   // flight keep fewer keyframes than that and are unchanged.
   int keyframes = 40;
-  int changes_per_frame = 2;   // keyframes thawed, and frozen, per frame at most
+  int changes_per_frame = 2;   // keyframes thawed per frame at most; as many frozen, plus
+                               // as many as were thawed (updateLocalMap)
   int relocalise_thaws = 8;    // keyframes thawed around each relocalisation candidate
   int jpeg_quality = 90;       // cold keyframes' images [1, 100]
   // Where cold keyframes' images and extras go (keyframe_store.h); empty: they stay in memory.
