@@ -886,11 +886,11 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
 void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
   if (!depthInTracking(mode_)) return;
   if (!options_.depth_align.enabled && !options_.reloc_features.enabled) return;
-  // The job owns what it reads: the images' buffers (shared, never written again) and copies
-  // of the options, so that neither the keyframe nor an option change can reach it.
   if (2 * (replica_.map().numKeyframes() + 1) >= static_cast<size_t>(options_.relocalise_shortlist)) {
     warmUpVocabulary();
   }
+  // The job owns what it reads: the images' buffers (shared, never written again) and copies
+  // of the options, so that neither the keyframe nor an option change can reach it.
   extras_[keyframe.id] = keyframe_worker_.submit(
       [depth = keyframe.depth, grey = keyframe.grey(), camera = camera_, noise = options_.pose.noise,
        align = options_.depth_align, features = options_.reloc_features, ready = vocabulary_ready_] {
