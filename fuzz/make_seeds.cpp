@@ -35,7 +35,7 @@ void writeMessages(const fs::path& out) {
   write(out / "fuzz_keyframe", "jpeg_quarter", test::encode(toLcm(keyframe, KeyframeEncoding{true, 75, 4})));
   write(out / "fuzz_map", "snapshot", test::encode(toLcm(test::sampleMapUpdate())));
   MapUpdate delta;
-  delta.map_id = 3, delta.version = 4, delta.acked_keyframes = {0, 1};
+  delta.map_id = 3, delta.version = 4, delta.acked_below = 2;
   write(out / "fuzz_map", "delta", test::encode(toLcm(delta)));
   write(out / "fuzz_status", "tracker", test::encode(toLcm(test::sampleStatus())));
   write(out / "fuzz_status", "empty", test::encode(toLcm(ComponentStatus{})));

@@ -417,8 +417,7 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
   msg.map_id = update.map_id;
   msg.version = update.version;
   msg.is_snapshot = update.is_snapshot;
-  msg.acked_keyframes = update.acked_keyframes;
-  msg.num_acked = static_cast<int32_t>(msg.acked_keyframes.size());
+  msg.acked_below = update.acked_below;
   for (const auto& kf : update.keyframes) {
     rgbdslam::keyframe_pose_t out;
     out.keyframe_id = kf.id;
@@ -445,7 +444,7 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
 namespace {
 
 Status checkMapHeader(const rgbdslam::map_t& msg) {
-  for (Status s : {checkId(msg.map_id, "map"), checkCount(msg.num_acked, msg.acked_keyframes.size(), "num_acked"),
+  for (Status s : {checkId(msg.map_id, "map"), checkId(msg.acked_below, "acknowledged keyframes' end"),
                    checkCount(msg.num_keyframes, msg.keyframes.size(), "num_keyframes"),
                    checkCount(msg.num_points, msg.points.size(), "num_points"),
                    checkCount(msg.num_moved, msg.moved.size(), "num_moved"),
@@ -454,9 +453,6 @@ Status checkMapHeader(const rgbdslam::map_t& msg) {
     if (!s) return s;
   }
   if (msg.version < 0) return Error{"negative version"};
-  for (int64_t id : msg.acked_keyframes) {
-    if (Status s = checkId(id, "acknowledged keyframe"); !s) return s;
-  }
   for (int64_t id : msg.removed_points) {
     if (Status s = checkId(id, "removed point"); !s) return s;
   }
@@ -500,7 +496,7 @@ Expected<MapUpdate> fromLcm(const rgbdslam::map_t& msg) {
   update.map_id = msg.map_id;
   update.version = msg.version;
   update.is_snapshot = msg.is_snapshot;
-  update.acked_keyframes = msg.acked_keyframes;
+  update.acked_below = msg.acked_below;
   if (Status s = decodeMapContents(msg, &update); !s) return Error{what + s.error()};
   update.removed_points = msg.removed_points;
   update.removed_keyframes = msg.removed_keyframes;

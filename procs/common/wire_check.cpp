@@ -124,8 +124,7 @@ Status checkWire(const rgbdslam::keyframe_t*, const void* data, size_t size) {
 Status checkWire(const rgbdslam::map_t*, const void* data, size_t size) {
   WireReader r(data, size, rgbdslam::map_t::getTypeName());
   r.fingerprint(rgbdslam::map_t::getHash());
-  r.skip(8 + 8 + 8 + 1, "utime, map_id, version, is_snapshot");
-  r.array(r.count("num_acked", kMaxMapKeyframes), 8, "acked_keyframes");
+  r.skip(8 + 8 + 8 + 1 + 8, "utime, map_id, version, is_snapshot, acked_below");
   r.array(r.count("num_keyframes", kMaxMapKeyframes), kKeyframePoseBytes, "keyframes");
   r.array(r.count("num_points", kMaxMapPoints), kMapPointBytes, "points");
   r.array(r.count("num_moved", kMaxMapPoints), kPointPositionBytes, "moved");

@@ -247,11 +247,8 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
                 << holding << "\n";
       return;
   }
-  for (KeyframeId id : update->acked_keyframes) {
-    auto it = created_.find(id);
-    if (it == created_.end()) continue;
+  for (auto it = created_.begin(); it != created_.end() && it->first < update->acked_below; it = created_.erase(it)) {
     in_map_ms_.add(msBetween(it->second, now));
-    created_.erase(it);
   }
 }
 

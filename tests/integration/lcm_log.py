@@ -3,7 +3,8 @@
 
 Usage:
   lcm_log.py maps LOG        one line per SLAM_MAP message:
-                             recv_utime map_id version is_snapshot num_acked max_acked
+                             recv_utime map_id version is_snapshot acked_below max_acked
+                             (max_acked = acked_below - 1: the newest acknowledged id)
   lcm_log.py status LOG CH   one line per status_t message on channel CH:
                              recv_utime component state name=value ... (counters only)
   lcm_log.py keyframes LOG   one line per SLAM_KEYFRAME message: recv_utime map_id keyframe_id
@@ -61,9 +62,8 @@ def main():
         try:
             r = Reader(payload)
             if what == "maps" and channel == "SLAM_MAP":
-                _t, map_id, version, snap, n = r.take("qqqbi")
-                acked = [r.take("q") for _ in range(n)]
-                print(utime, map_id, version, int(snap != 0), n, max(acked) if acked else -1)
+                _t, map_id, version, snap, acked_below = r.take("qqqbq")
+                print(utime, map_id, version, int(snap != 0), acked_below, acked_below - 1)
             elif what == "keyframes" and channel == "SLAM_KEYFRAME":
                 _t, map_id, kf = r.take("qqq")
                 print(utime, map_id, kf)

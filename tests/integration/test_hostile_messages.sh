@@ -21,7 +21,7 @@ mapper=\$!
 logger=\$!
 sleep 1
 send() { '$TOOLS/send-messages' --lcm-url '$LCM_URL' --channel \$1 --bad \$2 --map-id 77; sleep 0.2; }
-send SLAM_MAP map-huge-acked
+send SLAM_MAP map-huge-count
 send SLAM_KEYFRAME keyframe-huge-counts
 send SLAM_MAP_RECEIPT status-huge-counts
 send SLAM_KEYFRAME keyframe-level-4
@@ -38,12 +38,12 @@ wait \$tracker; wait \$mapper; wait \$logger  # each must exit 0
 
 cd "$WORK"
 count() { grep -c -- "$1" "$2" || true; }
-echo "tracker: $(grep -m1 'num_acked' tracker.err | cut -c1-160)"
+echo "tracker: $(grep -m1 'num_keyframes' tracker.err | cut -c1-160)"
 echo "mapper:  $(grep 'bad message on SLAM_KEYFRAME' mapper.err | cut -c1-160 | tr '\n' '|')"
 echo "mapper:  $(grep -m1 'bad message on SLAM_STATUS' mapper.err | cut -c1-160)"
 echo "pose-logger: $(grep '^pose-logger: [0-9]' logger.err)"
 echo "peak resident memory [kB]: $(tr '\n' ' ' < peak_kb.txt)"
-[ "$(count 'num_acked is 268435456' tracker.err)" = 1 ] || fail "the tracker did not report the map: $(cat tracker.err)"
+[ "$(count 'num_keyframes is 268435456' tracker.err)" = 1 ] || fail "the tracker did not report the map: $(cat tracker.err)"
 [ "$(count 'num_measurements is 100000000' mapper.err)" = 1 ] || fail "the huge keyframe was not reported: $(cat mapper.err)"
 [ "$(count 'pyramid level 4' mapper.err)" = 1 ] || fail "the level-4 keyframe was not reported"
 [ "$(count 'beyond the world bound' mapper.err)" = 1 ] || fail "the far keyframe was not reported"

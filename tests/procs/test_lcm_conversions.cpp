@@ -133,7 +133,7 @@ TEST(LcmConversions, MapRoundTrip) {
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->version, 8);
   EXPECT_TRUE(back->is_snapshot);
-  EXPECT_EQ(back->acked_keyframes, update.acked_keyframes);
+  EXPECT_EQ(back->acked_below, update.acked_below);
   EXPECT_EQ(back->removed_points, update.removed_points);
   EXPECT_EQ(back->removed_keyframes, update.removed_keyframes);
   ASSERT_EQ(back->points.size(), 1u);

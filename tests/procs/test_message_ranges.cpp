@@ -101,7 +101,7 @@ TEST(MessageRanges, MapContentsAreChecked) {
   msg.moved[0].position[0] = 3e30f;
   expectRejected(msg, "world bound");
   msg = toLcm(test::sampleMapUpdate());
-  msg.acked_keyframes[1] = -7;
+  msg.acked_below = -7;
   expectRejected(msg, "negative id -7");
   msg = toLcm(test::sampleMapUpdate());
   msg.removed_points[0] = -1;

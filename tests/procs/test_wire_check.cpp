@@ -46,20 +46,23 @@ TEST(WireCheck, EveryTypeAcceptsItsOwnEncoding) {
   EXPECT_TRUE(s) << s.error();
 }
 
-// Issue 13, red team: SLAM_MAP with num_acked >= 2^28 in 110 bytes; liblcm computed the
-// array's byte size in 32-bit int and read past the buffer (SIGSEGV in rgbd-tracker).
-TEST(WireCheck, MapWithHugeAcknowledgementCountIsRejected) {
+// Issue 13, red team: SLAM_MAP with an array count >= 2^28 in 110 bytes; liblcm computed the
+// array's byte size in 32-bit int and read past the buffer (SIGSEGV in rgbd-tracker). The
+// message then carried a list of acknowledged keyframes (now one number, acked_below).
+TEST(WireCheck, MapWithHugeArrayCountIsRejected) {
   MapUpdate update;
   update.map_id = 1;
   update.version = 2;
-  update.acked_keyframes = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+  update.acked_below = 9;
+  update.keyframes = {{0, SE3()}, {1, SE3()}};
   auto bytes = test::encode(toLcm(update));
-  const size_t num_acked = 8 + 8 + 8 + 8 + 1;  // fingerprint, utime, map_id, version, is_snapshot
+  // fingerprint, utime, map_id, version, is_snapshot, acked_below
+  const size_t num_keyframes = 8 + 8 + 8 + 8 + 1 + 8;
   for (int32_t count : {1 << 28, (1 << 29) + 1, std::numeric_limits<int32_t>::max(), -1}) {
-    putBigEndian32(bytes, num_acked, count);
-    expectRejected<rgbdslam::map_t>(bytes, "num_acked");
+    putBigEndian32(bytes, num_keyframes, count);
+    expectRejected<rgbdslam::map_t>(bytes, "num_keyframes");
   }
-  update.acked_keyframes.clear();
+  update.keyframes.clear();
   update.removed_points = {1, 2, 3};
   bytes = test::encode(toLcm(update));
   putBigEndian32(bytes, bytes.size() - 4 - 3 * 8 - 4, 1 << 28);  // num_removed (then no removed keyframes)

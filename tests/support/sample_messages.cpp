@@ -42,7 +42,7 @@ MapUpdate sampleMapUpdate() {
   update.map_id = 1234;
   update.version = 8;
   update.is_snapshot = true;
-  update.acked_keyframes = {0, 1, 2};
+  update.acked_below = 3;
   update.keyframes.push_back({2, somePose()});
   update.points.push_back({5, Vec3(0.5, 0.25, 3), 1, Eigen::Vector2d(100, 200), 0});
   update.moved_points.push_back({6, Vec3(100.0, -2.5, 1.25)});

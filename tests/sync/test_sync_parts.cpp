@@ -28,7 +28,7 @@ TEST(SyncOutbox, ResendsWithDoublingIntervalOldestFirstUntilAcknowledged) {
   EXPECT_TRUE(outbox.resendsDue(3 * kS - 1).empty());  // next after 2 s (doubled)
   EXPECT_EQ(outbox.resendsDue(3 * kS).size(), 2u);
   EXPECT_EQ(outbox.sends(0), 3);
-  const std::vector<double> ages = outbox.acknowledge({0, 7}, 3 * kS + kS / 2);
+  const std::vector<double> ages = outbox.acknowledgeBelow(1, 3 * kS + kS / 2);
   ASSERT_EQ(ages.size(), 1u);
   EXPECT_DOUBLE_EQ(ages[0], 3.5);
   EXPECT_EQ(outbox.size(), 2u);
@@ -45,7 +45,7 @@ TEST(SyncOutbox, RetainsTheNewestAcknowledgedForAMapperThatLosesThem) {
   options.retained = 2;
   KeyframeOutbox<int> outbox(options);
   for (int id = 0; id < 4; ++id) outbox.sent(id, 100 + id, 0);
-  outbox.acknowledge({0, 1, 2, 3}, kS / 2);
+  outbox.acknowledgeBelow(4, kS / 2);
   EXPECT_TRUE(outbox.empty());
   EXPECT_EQ(outbox.oldestSendable(4), 2) << "keyframes 0 and 1 are gone for good";
   EXPECT_EQ(outbox.resendFrom(1, kS), 2);  // the mapper lost keyframes 1 on
@@ -54,12 +54,12 @@ TEST(SyncOutbox, RetainsTheNewestAcknowledgedForAMapperThatLosesThem) {
   EXPECT_EQ(*due[0], 102);
   EXPECT_EQ(*due[1], 103);
   EXPECT_EQ(outbox.oldestSendable(4), 2);
-  outbox.acknowledge({2, 3}, 2 * kS);
+  outbox.acknowledgeBelow(4, 2 * kS);
   EXPECT_EQ(outbox.oldestSendable(4), 2) << "retained again";
   options.retained = 0;
   KeyframeOutbox<int> none(options);
   none.sent(0, 100, 0);
-  none.acknowledge({0}, kS);
+  none.acknowledgeBelow(1, kS);
   EXPECT_EQ(none.oldestSendable(1), 1);
   EXPECT_EQ(none.resendFrom(0, kS), 0);
 }
@@ -127,7 +127,7 @@ TEST(SyncPublisher, SnapshotFirstThenDeltasAtOnceForKeyframesAndRateLimitedForRe
   EXPECT_TRUE(first->is_snapshot);
   EXPECT_EQ(first->version, 1);
   EXPECT_EQ(first->map_id, 9);
-  EXPECT_EQ(first->acked_keyframes, std::vector<KeyframeId>{0});
+  EXPECT_EQ(first->acked_below, 1);
   EXPECT_EQ(first->points.size(), 2u);
   EXPECT_FALSE(publisher.publishDue(m.map, 1, kS / 10)) << "nothing new";
   m.map.point(1)->p_w.x() += 0.01;

@@ -7,7 +7,7 @@
 //   --bad map-foreign-map        a valid map snapshot of map 424242, version 10^9
 //   --bad frame-wrong-size       a valid 320x240 frame (the cameras are 640x480)
 //   Hostile input (issue 13), each a small message that crashed or stalled a process before:
-//   --bad map-huge-acked         a ~110-byte map claiming 2^28 acknowledged ids
+//   --bad map-huge-count         a ~110-byte map claiming 2^28 keyframe poses
 //   --bad keyframe-huge-counts   a small keyframe claiming 10^8 measurements
 //   --bad status-huge-counts     a 54-byte status claiming 10^8 counters
 //   --bad keyframe-level-4       keyframe 0 of map --map-id whose points claim pyramid level 4
@@ -101,11 +101,12 @@ std::vector<uint8_t> spoiledKeyframe(int64_t map_id, void (*spoil)(rgbdslam::key
 
 // Small messages whose counts or fields crashed or stalled a process before issue 13.
 std::vector<uint8_t> hostileMessage(const std::string& kind, int64_t map_id) {
-  if (kind == "map-huge-acked") {
+  if (kind == "map-huge-count") {
     MapUpdate update;
-    update.map_id = map_id, update.version = 2, update.acked_keyframes = {0, 1, 2, 3, 4, 5, 6, 7};
+    update.map_id = map_id, update.version = 2, update.acked_below = 8;
+    update.keyframes.resize(1);
     auto bytes = encode(toLcm(update));
-    putBigEndian32(bytes, 8 + 8 + 8 + 8 + 1, 1u << 28);  // num_acked
+    putBigEndian32(bytes, 8 + 8 + 8 + 8 + 1 + 8, 1u << 28);  // num_keyframes
     return bytes;
   }
   if (kind == "keyframe-huge-counts") {
@@ -162,7 +163,7 @@ int main(int argc, char** argv) {
   cli.option("channel", "NAME", "channel", "SLAM_POSE");
   cli.option("poses", "N", "valid pose_t messages to send", "0");
   cli.option("rate", "HZ", "messages per second", "200");
-  cli.option("bad", "KIND", "one bad message: truncated|oversized|wrongtype|garbage|keyframe-foreign-map|map-stale|map-foreign-map|frame-wrong-size|map-huge-acked|keyframe-huge-counts|status-huge-counts|keyframe-level-4|keyframe-far");
+  cli.option("bad", "KIND", "one bad message: truncated|oversized|wrongtype|garbage|keyframe-foreign-map|map-stale|map-foreign-map|frame-wrong-size|map-huge-count|keyframe-huge-counts|status-huge-counts|keyframe-level-4|keyframe-far");
   cli.option("type", "T", "message type the malformed kinds start from: pose|frame|keyframe|map", "pose");
   cli.option("map-id", "ID", "map id of the poses and of --bad map-stale", "1");
   addLcmUrlOption(cli);

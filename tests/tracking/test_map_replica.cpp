@@ -116,7 +116,7 @@ TEST_F(LocalMap, AStoreHoldsTheColdKeyframesImages) {
   EXPECT_EQ((*store)->bytes(), stored) << "frozen again: the stored JPEG is kept, not made again";
   MapUpdate acked;
   acked.version = 1;
-  acked.acked_keyframes = {0, 1, 2};
+  acked.acked_below = 3;
   ASSERT_TRUE(replica->apply(acked));
   MapUpdate cull;
   cull.version = 2;
@@ -157,7 +157,7 @@ TEST_F(LocalMap, ThawingForOneCandidateAfterAnotherKeepsTheHotSetBounded) {
 TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
   MapUpdate acked;
   acked.version = 1;
-  acked.acked_keyframes = {0, 1, 2};
+  acked.acked_below = 3;
   ASSERT_TRUE(replica->apply(acked));
   replica->addProvisionalPoint(2, NewPoint{MapPoint(MapPointData{300, Vec3(1, 0, 2), 1, {300, 200}, 0}),
                                            Measurement{300, {300, 200}, 0, 2.0}});  // the mapper never had it
@@ -192,7 +192,7 @@ TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
   MapUpdate snapshot;
   snapshot.version = 5;
   snapshot.is_snapshot = true;
-  snapshot.acked_keyframes = {0, 1, 2};
+  snapshot.acked_below = 3;
   snapshot.keyframes = {{0, keyframe(0).T_w_c}};
   snapshot.points.push_back(MapPointData{100, Vec3(0, 0, 2), 0, Eigen::Vector2d(320, 240), 0});
   snapshot.removed_keyframes = {1, 2};

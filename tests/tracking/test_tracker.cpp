@@ -325,7 +325,7 @@ MapUpdate wholeMapShiftedForTrackerTest(const Map& map, const Vec3& shift) {
   MapUpdate moved;
   moved.map_id = 1;
   moved.version = 1;
-  moved.acked_keyframes = {0};
+  moved.acked_below = 1;
   moved.keyframes.push_back({0, SE3(Mat3::Identity(), shift)});
   for (const auto& [id, point] : map.points()) {
     MapPointData data = point.data();
@@ -392,7 +392,7 @@ TEST_F(TrackerMapUpdateTest, SnapshotKeepsProvisionalPointsOfUnacknowledgedKeyfr
   EXPECT_EQ(tracker_.map().numPoints(), points_before);
   // Once keyframe 0 is acknowledged, a snapshot without its points removes them.
   MapUpdate acked = update(2, /*snapshot=*/true);
-  acked.acked_keyframes = {0};
+  acked.acked_below = 1;
   EXPECT_TRUE(tracker_.applyMap(acked));
   EXPECT_EQ(tracker_.map().numPoints(), 0u);
 }

@@ -78,8 +78,7 @@ std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId ack
   update.map_id = map_id_;
   update.version = ++version_;
   update.is_snapshot = snapshot;
-  update.acked_keyframes.reserve(static_cast<size_t>(std::max<KeyframeId>(acked_below, 0)));
-  for (KeyframeId id = 0; id < acked_below; ++id) update.acked_keyframes.push_back(id);
+  update.acked_below = std::max<KeyframeId>(acked_below, 0);
   pending_ = MapChanges{};
   last_publish_us_ = now_us;
   integrated_unpublished_ = ack_due_ = false;

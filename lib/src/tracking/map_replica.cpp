@@ -87,7 +87,7 @@ void MapReplica::addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& poi
 }
 
 Keyframe* MapReplica::addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe) {
-  acked_.insert(keyframe->id);
+  acked_below_ = std::max(acked_below_, keyframe->id + 1);
   return map_.addKeyframe(std::move(keyframe));
 }
 
@@ -96,7 +96,7 @@ void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(map_.addP
 void MapReplica::clear() {
   if (store_) store_->clear();
   map_ = Map();
-  acked_.clear();
+  acked_below_ = 0;
   slots_.clear();
   slot_index_.clear();
 }
@@ -133,7 +133,7 @@ void MapReplica::removePoint(PointId id) {
 
 bool MapReplica::apply(const MapUpdate& update) {
   bool unknown = false;
-  for (KeyframeId id : update.acked_keyframes) acked_.insert(id);
+  acked_below_ = std::max(acked_below_, update.acked_below);
   for (const KeyframePose& pose : update.keyframes) {
     Keyframe* keyframe = map_.keyframe(pose.id);
     if (keyframe) keyframe->T_w_c = pose.T_w_c;
@@ -144,7 +144,7 @@ bool MapReplica::apply(const MapUpdate& update) {
     for (const MapPointData& p : update.points) kept.insert(p.id);
     std::vector<PointId> gone;
     for (const auto& [id, point] : map_.points()) {
-      if (!kept.count(id) && acked_.count(point.source_keyframe)) gone.push_back(id);
+      if (!kept.count(id) && point.source_keyframe < acked_below_) gone.push_back(id);
     }
     for (PointId id : gone) removePoint(id);
   }
@@ -170,7 +170,7 @@ bool MapReplica::apply(const MapUpdate& update) {
   for (KeyframeId id : update.removed_keyframes) {
     // The mapper culls only keyframes it has integrated, never keyframe 0: a message naming
     // another is refused for it (this keyframe would never come back to the replica).
-    if (id == 0 || !acked_.count(id)) unknown = unknown || map_.hasKeyframe(id);
+    if (id == 0 || id >= acked_below_) unknown = unknown || map_.hasKeyframe(id);
     else removeKeyframe(id);
   }
   return !unknown;

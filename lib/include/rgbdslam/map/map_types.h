@@ -53,7 +53,7 @@ struct MapUpdate {
   int64_t map_id = 0;
   int64_t version = 0;      // increases by one per published change
   bool is_snapshot = false; // true: full map; false: delta against version - 1
-  std::vector<KeyframeId> acked_keyframes;
+  KeyframeId acked_below = 0;  // keyframes with smaller ids are integrated (acknowledged)
   std::vector<KeyframePose> keyframes;
   std::vector<MapPointData> points;         // new or re-described points (all, in a snapshot)
   std::vector<PointPosition> moved_points;  // known points that only moved (patch unchanged)

@@ -58,16 +58,13 @@ class KeyframeOutbox {
     return due;
   }
 
-  // Drops every listed keyframe that is waiting; returns, for each one dropped, the time
-  // from its first send to now [s] (the acknowledgement latency).
-  std::vector<double> acknowledge(const std::vector<KeyframeId>& acked, int64_t now_us) {
+  // Drops every waiting keyframe with an id below 'below'; returns, for each one dropped,
+  // the time from its first send to now [s] (the acknowledgement latency).
+  std::vector<double> acknowledgeBelow(KeyframeId below, int64_t now_us) {
     std::vector<double> ages_s;
-    for (KeyframeId id : acked) {
-      const auto it = entries_.find(id);
-      if (it == entries_.end()) continue;
+    for (auto it = entries_.begin(); it != entries_.end() && it->first < below; it = entries_.erase(it)) {
       ages_s.push_back((now_us - it->second.first_sent_us) * 1e-6);
-      if (options_.retained > 0) retained_[id] = std::move(it->second.message);
-      entries_.erase(it);
+      if (options_.retained > 0) retained_[it->first] = std::move(it->second.message);
     }
     while (static_cast<int>(retained_.size()) > std::max(options_.retained, 0)) retained_.erase(retained_.begin());
     return ages_s;

@@ -4,7 +4,7 @@
 //   - A newly integrated keyframe is published at once (its acknowledgement stops the
 //     tracker's re-sends); refinement results at most every map_period_s.
 //   - Deltas carry what changed since the last publication, above the thresholds
-//     (map/map_diff.h); every message lists the integrated keyframes (the acknowledgement).
+//     (map/map_diff.h); every message acknowledges the integrated keyframes (acked_below).
 //   - Snapshots (the whole map): the first publication after start() (a start or a restart
 //     from the journal), every snapshot_period_s as a fallback, and when the tracker's
 //     receipts show it stuck behind a lost delta: at once when a receipt shows a version

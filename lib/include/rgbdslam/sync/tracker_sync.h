@@ -53,15 +53,14 @@ class TrackerSync {
       return result;
     }
     if (update.version < acks_from_version_) return result;
-    const KeyframeId acked_below =
-        update.acked_keyframes.empty() ? 0 : *std::max_element(update.acked_keyframes.begin(), update.acked_keyframes.end()) + 1;
+    const KeyframeId acked_below = update.acked_below;
     if (result.verdict == MapVerdict::kApply && acked_below < acked_below_) {
       result.resent_after_loss = outbox_.resendFrom(acked_below, now_us);
       acks_from_version_ = update.version;
       acked_below_ = acked_below;
       ++mapper_losses_;
     }
-    result.ack_latencies_s = outbox_.acknowledge(update.acked_keyframes, now_us);
+    result.ack_latencies_s = outbox_.acknowledgeBelow(acked_below, now_us);
     acked_below_ = std::max(acked_below_, acked_below);
     if (result.verdict != MapVerdict::kApply) return result;
     result.unknown_keyframes = !apply(update);

@@ -98,7 +98,7 @@ class MapReplica {
   PinholeCamera camera_;
   KeyframeStore* store_ = nullptr;
   Map map_;
-  std::unordered_set<KeyframeId> acked_;  // keyframes the mapper has acknowledged
+  KeyframeId acked_below_ = 0;  // the mapper has acknowledged every keyframe below this id
   std::vector<PointSlot> slots_;
   std::unordered_map<PointId, size_t> slot_index_;
 };
