@@ -147,6 +147,40 @@ TEST(SyncPublisher, SnapshotFirstThenDeltasAtOnceForKeyframesAndRateLimitedForRe
   EXPECT_TRUE(periodic->is_snapshot) << "every snapshot_period_s";
 }
 
+// Keyframes faster than map_period_s: each goes out at once with its new points, while the
+// moves of points already published wait for the next refinement and go out once.
+TEST(SyncPublisher, MovesBetweenKeyframesWaitForTheRefinementPeriod) {
+  SmallMap m;
+  MapPublisher publisher(MapPublisherOptions{1.0, 30.0, {}});
+  publisher.start(9, 0);
+  publisher.note(m.changes, /*integrated=*/true);
+  ASSERT_TRUE(publisher.publishDue(m.map, 1, 0));  // the snapshot
+  MapPoint fresh;
+  fresh.id = 3, fresh.p_w = Vec3(0, 0, 3), fresh.source_keyframe = 0;
+  m.map.addPoint(fresh);
+  m.map.point(1)->p_w.x() += 0.01;
+  MapChanges second;
+  second.points = {1, 3};
+  publisher.note(second, /*integrated=*/true);
+  auto keyframe = publisher.publishDue(m.map, 2, kS / 5);
+  ASSERT_TRUE(keyframe) << "a new keyframe goes out at once";
+  ASSERT_EQ(keyframe->points.size(), 1u);
+  EXPECT_EQ(keyframe->points[0].id, 3);
+  EXPECT_TRUE(keyframe->moved_points.empty()) << "the move waits";
+  m.map.point(1)->p_w.x() += 0.01;  // moved again before the refinement
+  publisher.note(second, /*integrated=*/true);
+  auto next = publisher.publishDue(m.map, 3, kS / 2);
+  ASSERT_TRUE(next);
+  EXPECT_TRUE(next->points.empty() && next->moved_points.empty());
+  EXPECT_FALSE(publisher.publishDue(m.map, 3, kS - 1));
+  auto refinement = publisher.publishDue(m.map, 3, kS);
+  ASSERT_TRUE(refinement) << "the held moves are due after map_period_s";
+  ASSERT_EQ(refinement->moved_points.size(), 1u);
+  EXPECT_EQ(refinement->moved_points[0].id, 1);
+  EXPECT_DOUBLE_EQ(refinement->moved_points[0].p_w.x(), 0.02) << "once, at its latest position";
+  EXPECT_FALSE(publisher.publishDue(m.map, 3, 3 * kS)) << "nothing is left";
+}
+
 TEST(SyncPublisher, ReceiptsShowingAStuckTrackerBringASnapshot) {
   SmallMap m;
   MapPublisher publisher(MapPublisherOptions{0.0, 1000.0, {}});

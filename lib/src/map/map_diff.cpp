@@ -14,12 +14,16 @@ void MapChanges::merge(const MapChanges& later) {
   removed_points.insert(later.removed_points.begin(), later.removed_points.end());
 }
 
-MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes) {
+MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes, MapChanges* held_back) {
   MapUpdate update;
   for (KeyframeId id : changes.keyframes) {  // std::set: id order
     const Keyframe* kf = map.keyframe(id);
     if (!kf) continue;
     auto it = keyframes_.find(id);
+    if (held_back && it != keyframes_.end()) {
+      held_back->keyframes.insert(id);
+      continue;
+    }
     const bool moved =
         it == keyframes_.end() ||
         (kf->T_w_c.translation() - it->second.translation()).norm() > options_.keyframe_move_m ||
@@ -32,7 +36,9 @@ MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes) {
     const MapPoint* point = map.point(id);
     if (!point) continue;  // added and removed again since: in neither list
     auto it = points_.find(id);
-    if (it == points_.end() || it->second.source != point->source_keyframe) {
+    if (held_back && it != points_.end() && it->second.source == point->source_keyframe) {
+      held_back->points.insert(id);
+    } else if (it == points_.end() || it->second.source != point->source_keyframe) {
       update.points.push_back(point->data());  // new, or re-described (a new patch)
       points_[id] = {point->p_w, point->source_keyframe};
     } else if ((point->p_w - it->second.p_w).norm() > options_.point_move_m) {

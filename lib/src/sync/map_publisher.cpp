@@ -70,17 +70,19 @@ std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId ack
                                                   int64_t now_us) {
   if (!started()) return std::nullopt;
   const bool snapshot = snapshot_due_ || elapsed(last_snapshot_us_, now_us, options_.snapshot_period_s);
-  const bool refinement_due = (!pending_.empty() || ack_due_) &&
-                              elapsed(last_publish_us_, now_us, options_.map_period_s);
+  const bool refinement_time = elapsed(last_refinement_us_, now_us, options_.map_period_s);
+  const bool refinement_due = (!pending_.empty() || ack_due_) && refinement_time;
   if (!snapshot && !integrated_unpublished_ && !refinement_due) return std::nullopt;
-  MapUpdate update = snapshot ? differ_.snapshot(map) : differ_.delta(map, pending_);
+  MapChanges held_back;  // moves that wait for the next refinement
+  MapUpdate update = snapshot ? differ_.snapshot(map)
+                              : differ_.delta(map, pending_, refinement_time ? nullptr : &held_back);
   update.utime = now_us;
   update.map_id = map_id_;
   update.version = ++version_;
   update.is_snapshot = snapshot;
   update.acked_below = std::max<KeyframeId>(acked_below, 0);
-  pending_ = MapChanges{};
-  last_publish_us_ = now_us;
+  pending_ = std::move(held_back);
+  if (snapshot || refinement_time) last_refinement_us_ = now_us;
   integrated_unpublished_ = ack_due_ = false;
   if (snapshot) {
     ++snapshots_published_;
