@@ -33,6 +33,11 @@ void writeMessages(const fs::path& out) {
   write(out / "fuzz_keyframe", "lossless", test::encode(toLcm(keyframe)));
   write(out / "fuzz_keyframe", "jpeg_half", test::encode(toLcm(keyframe, KeyframeEncoding{true, 75, 2})));
   write(out / "fuzz_keyframe", "jpeg_quarter", test::encode(toLcm(keyframe, KeyframeEncoding{true, 75, 4})));
+  KeyframeEncoding inverse{true, 75, 4};
+  inverse.inverse_depth_step = 8.3e-4;  // the tracker's default: a quarter of the depth sigma
+  write(out / "fuzz_keyframe", "jpeg_quarter_inverse", test::encode(toLcm(keyframe, inverse)));
+  inverse.depth_step = 1;
+  write(out / "fuzz_keyframe", "jpeg_inverse", test::encode(toLcm(keyframe, inverse)));
   write(out / "fuzz_map", "snapshot", test::encode(toLcm(test::sampleMapUpdate())));
   MapUpdate delta;
   delta.map_id = 3, delta.version = 4, delta.acked_below = 2;

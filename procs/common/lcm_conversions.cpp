@@ -92,18 +92,29 @@ std::string sizeText(int width, int height) {
   return std::to_string(width) + "x" + std::to_string(height);
 }
 
-// Raw or zlib depth bytes -> CV_16UC1; formats as in rgbd_frame_t / keyframe_t.
+// Raw, zlib or inverse-depth bytes -> CV_16UC1 at depth_scale units per metre; formats as
+// in rgbd_frame_t / keyframe_t.
 Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, int width,
-                              int height) {
+                              int height, double depth_scale) {
   if (format == rgbdslam::rgbd_frame_t::DEPTH_NONE) return cv::Mat();
   if (format == rgbdslam::rgbd_frame_t::DEPTH_ZLIB_U16) {
     auto depth = decompressDepth(bytes.data(), bytes.size(), width, height);
     if (!depth) return Error{"depth: " + depth.error()};
     return depth;
   }
-  if (format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF || format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_QUARTER) {
-    const int step = format == rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF ? 2 : 4;
-    auto sparse = decompressDepth(bytes.data(), bytes.size(), (width + step - 1) / step, (height + step - 1) / step);
+  using K = rgbdslam::keyframe_t;
+  if (format == K::DEPTH_INVERSE_ZSTD) {
+    auto depth = decompressInverseDepth(bytes.data(), bytes.size(), width, height, depth_scale);
+    if (!depth) return Error{"depth: " + depth.error()};
+    return depth;
+  }
+  if (format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_ZLIB_U16_QUARTER ||
+      format == K::DEPTH_INVERSE_ZSTD_HALF || format == K::DEPTH_INVERSE_ZSTD_QUARTER) {
+    const int step = format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_INVERSE_ZSTD_HALF ? 2 : 4;
+    const int sparse_width = (width + step - 1) / step, sparse_height = (height + step - 1) / step;
+    auto sparse = format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_ZLIB_U16_QUARTER
+                      ? decompressDepth(bytes.data(), bytes.size(), sparse_width, sparse_height)
+                      : decompressInverseDepth(bytes.data(), bytes.size(), sparse_width, sparse_height, depth_scale);
     if (!sparse) return Error{"subsampled depth: " + sparse.error()};
     cv::Mat depth(height, width, CV_16UC1);
     for (int v = 0; v < height; ++v) {
@@ -225,7 +236,7 @@ Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg) {
   } else if (msg.colour_format != rgbdslam::rgbd_frame_t::COLOUR_NONE) {
     return Error{"unknown colour format " + std::to_string(msg.colour_format)};
   }
-  auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height);
+  auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
   if (!depth) return Error{depth.error()};
   frame.depth = *depth;
   if (!frame.depth.empty()) {
@@ -302,9 +313,16 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   msg.grey_format = encoding.jpeg_grey ? rgbdslam::keyframe_t::GREY_JPEG : rgbdslam::keyframe_t::GREY_PNG;
   msg.grey = encoding.jpeg_grey ? encodeJpeg(keyframe.grey, encoding.jpeg_quality) : encodePng(keyframe.grey);
   msg.grey_size = static_cast<int32_t>(msg.grey.size());
-  if (encoding.depth_step > 1 && !keyframe.depth.empty()) {
+  using K = rgbdslam::keyframe_t;
+  const bool inverse = encoding.inverse_depth_step > 0 && keyframe.depth_scale > 0;
+  if (inverse && !keyframe.depth.empty()) {
+    const int step = encoding.depth_step >= 4 ? 4 : encoding.depth_step >= 2 ? 2 : 1;
+    msg.depth_format = step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF : K::DEPTH_INVERSE_ZSTD_QUARTER;
+    msg.depth = compressInverseDepth(step == 1 ? keyframe.depth : subsampleDepth(keyframe.depth, step),
+                                     keyframe.depth_scale, encoding.inverse_depth_step);
+  } else if (encoding.depth_step > 1 && !keyframe.depth.empty()) {
     const int step = encoding.depth_step >= 4 ? 4 : 2;
-    msg.depth_format = step == 2 ? rgbdslam::keyframe_t::DEPTH_ZLIB_U16_HALF : rgbdslam::keyframe_t::DEPTH_ZLIB_U16_QUARTER;
+    msg.depth_format = step == 2 ? K::DEPTH_ZLIB_U16_HALF : K::DEPTH_ZLIB_U16_QUARTER;
     msg.depth = compressDepth(subsampleDepth(keyframe.depth, step), 6);
   } else {
     encodeDepth(keyframe.depth, true, 1, &msg.depth_format, &msg.depth);
@@ -400,7 +418,7 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   keyframe.id = msg.keyframe_id;
   keyframe.T_w_c = *T_w_c;
   if (Status s = decodeGrey(msg, &keyframe); !s) return Error{what + s.error()};
-  auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height);
+  auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
   if (!depth) return Error{what + depth.error()};
   keyframe.depth = *depth;
   keyframe.depth_scale = msg.depth_scale;

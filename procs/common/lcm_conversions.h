@@ -53,6 +53,9 @@ struct KeyframeEncoding {
   int jpeg_quality = 90;    // JPEG quality [1, 100]
   int depth_step = 1;       // depth at every n-th pixel and row: 1 (all), 2 (DEPTH_ZLIB_U16_HALF)
                             // or 4 (DEPTH_ZLIB_U16_QUARTER)
+  // > 0: depth as quantised inverse depth in steps of this [1/m] (DEPTH_INVERSE_ZSTD*,
+  // image/codec.h); 0: zlib, lossless.
+  double inverse_depth_step = 0.0;
 };
 rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding& encoding = {});
 Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);

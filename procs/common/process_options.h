@@ -9,6 +9,7 @@
 
 #include "common/lcm_conversions.h"
 #include "common/link_budget.h"
+#include "rgbdslam/model/noise_model.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
@@ -31,8 +32,18 @@ struct TrackerProcessOptions {
   double ack_wait_s = 10;        // [s]
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
-  LinkBudgetOptions link_budget;  // the best rung is keyframe_encoding (common/link_budget.h)
+  // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma
+  // (image/codec.h: the rounding adds 0.07 sigma rms at 0.25; 0: zlib, lossless).
+  double keyframe_depth_step_sigma = 0.25;  // [sigma]
+  NoiseModel noise;               // its depth sigma (section "noise", shared with the tracker)
+  LinkBudgetOptions link_budget;  // the best rung is bestEncoding() (common/link_budget.h)
   void bind(OptionRegistry* registry);
+  // keyframe_encoding with the inverse-depth step [1/m] (keyframe_depth_step_sigma * a).
+  KeyframeEncoding bestEncoding() const {
+    KeyframeEncoding best = keyframe_encoding;
+    best.inverse_depth_step = keyframe_depth_step_sigma * noise.depth_sigma_a;
+    return best;
+  }
 };
 
 struct MapperProcessOptions {

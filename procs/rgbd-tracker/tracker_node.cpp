@@ -48,7 +48,7 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
     : local_(local), link_(link), options_(std::move(options)),
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
       sync_(map_id, options_.sync.outbox), budget_(options_.process.link_budget),
-      ladder_(encodingLadder(options_.process.keyframe_encoding, options_.process.link_budget.min_jpeg_quality)) {}
+      ladder_(encodingLadder(options_.process.bestEncoding(), options_.process.link_budget.min_jpeg_quality)) {}
 
 void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
   tracker_.load(map, !localise_only);

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -30,6 +34,73 @@ TEST(Codec, TruncatedOrWrongSizedDepthIsAnError) {
   EXPECT_FALSE(decompressDepth(bytes.data(), bytes.size(), 64, 49));
   const std::vector<uint8_t> garbage(100, 0xAB);
   EXPECT_FALSE(decompressDepth(garbage.data(), garbage.size(), 64, 48));
+}
+
+// A wall 1-6 m away read by a Kinect-like sensor: sigma = a z^2, stored in millimetres, and
+// a band without readings.
+cv::Mat noisyWall(int width, int height, double a) {
+  cv::Mat depth(height, width, CV_16UC1);
+  cv::RNG rng(7);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const double z = 1.0 + 5.0 * u / width;
+      depth.at<uint16_t>(v, u) = v % 16 < 2 ? 0 : static_cast<uint16_t>(std::lround(1000 * (z + rng.gaussian(a * z * z))));
+    }
+  }
+  return depth;
+}
+
+TEST(Codec, InverseDepthStaysWithinHalfAStepAndKeepsMissingReadings) {
+  const double a = 3.331e-3, step = 0.25 * a;
+  const cv::Mat depth = noisyWall(160, 120, a);
+  const auto bytes = compressInverseDepth(depth, 1000.0, step);
+  auto back = decompressInverseDepth(bytes.data(), bytes.size(), 160, 120, 1000.0);
+  ASSERT_TRUE(back) << back.error();
+  double worst = 0;
+  for (int v = 0; v < 120; ++v) {
+    for (int u = 0; u < 160; ++u) {
+      const int raw = depth.at<uint16_t>(v, u), out = back->at<uint16_t>(v, u);
+      ASSERT_EQ(raw == 0, out == 0) << u << "," << v;
+      if (raw == 0) continue;
+      // Half a step in inverse depth, and the millimetre of the decoded reading.
+      const double z = raw / 1000.0, z_out = out / 1000.0;
+      worst = std::max(worst, std::abs(1 / z_out - 1 / z) / (step / 2 + 0.0005 / (z_out * z_out)));
+    }
+  }
+  EXPECT_LE(worst, 1.0 + 1e-9);
+  EXPECT_LT(bytes.size(), compressDepth(depth, 6).size() * 3 / 4) << "a quarter smaller than zlib at least";
+}
+
+TEST(Codec, AnInverseStepTooFineForTheNearestReadingIsWidened) {
+  cv::Mat depth(8, 8, CV_16UC1, cv::Scalar(300));  // 0.3 m
+  depth.at<uint16_t>(3, 3) = 4000;
+  const auto bytes = compressInverseDepth(depth, 1000.0, 1e-9);
+  auto back = decompressInverseDepth(bytes.data(), bytes.size(), 8, 8, 1000.0);
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_NEAR(back->at<uint16_t>(0, 0), 300, 1);
+  EXPECT_NEAR(back->at<uint16_t>(3, 3), 4000, 200) << "a far reading is not clamped to the near one";
+}
+
+TEST(Codec, BadInverseDepthStreamsAreErrors) {
+  const cv::Mat depth = noisyWall(64, 48, 3.331e-3);
+  auto bytes = compressInverseDepth(depth, 1000.0, 1e-3);
+  EXPECT_TRUE(decompressInverseDepth(bytes.data(), bytes.size(), 64, 48, 1000.0));
+  EXPECT_FALSE(decompressInverseDepth(bytes.data(), bytes.size() - 1, 64, 48, 1000.0)) << "cut short";
+  EXPECT_FALSE(decompressInverseDepth(bytes.data(), 3, 64, 48, 1000.0)) << "no step";
+  EXPECT_FALSE(decompressInverseDepth(bytes.data(), bytes.size(), 64, 47, 1000.0)) << "another size";
+  EXPECT_FALSE(decompressInverseDepth(bytes.data(), bytes.size(), 64, 48, 0.0)) << "no scale";
+  auto longer = bytes;
+  longer.push_back(0);
+  EXPECT_FALSE(decompressInverseDepth(longer.data(), longer.size(), 64, 48, 1000.0)) << "trailing byte";
+  for (float step : {0.0f, -1.0f, 11.0f, std::numeric_limits<float>::quiet_NaN()}) {
+    auto spoiled = bytes;
+    uint32_t bits;
+    std::memcpy(&bits, &step, 4);
+    for (int i = 0; i < 4; ++i) spoiled[i] = static_cast<uint8_t>(bits >> (8 * i));
+    EXPECT_FALSE(decompressInverseDepth(spoiled.data(), spoiled.size(), 64, 48, 1000.0)) << step;
+  }
+  const std::vector<uint8_t> garbage(100, 0xAB);
+  EXPECT_FALSE(decompressInverseDepth(garbage.data(), garbage.size(), 64, 48, 1000.0));
 }
 
 TEST(Codec, JpegRoundTripIsClose) {

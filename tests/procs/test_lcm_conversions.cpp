@@ -167,6 +167,34 @@ TEST(LcmConversions, CompactKeyframeEncodingKeepsHalfTheDepthPixels) {
   EXPECT_EQ(back->grey.size(), keyframe.grey.size());
 }
 
+TEST(LcmConversions, KeyframeDepthAsInverseDepthAtEveryFourthPixel) {
+  KeyframeData keyframe;
+  keyframe.id = 1;
+  keyframe.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(90));
+  keyframe.depth = cv::Mat(48, 64, CV_16UC1);
+  cv::randu(keyframe.depth, 2500, 20000);  // 0.5-4 m at 5000 units per metre
+  keyframe.depth.at<uint16_t>(2, 2) = 0;
+  keyframe.depth_scale = 5000;
+  KeyframeEncoding encoding{true, 80, 4};
+  encoding.inverse_depth_step = 1e-3;  // [1/m]
+  const auto bytes = encode(toLcm(keyframe, encoding));
+  auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());
+  ASSERT_TRUE(msg) << msg.error();
+  EXPECT_EQ(int{msg->depth_format}, int{rgbdslam::keyframe_t::DEPTH_INVERSE_ZSTD_QUARTER});
+  auto back = fromLcm(*msg);
+  ASSERT_TRUE(back) << back.error();
+  ASSERT_EQ(back->depth.size(), keyframe.depth.size());
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) {  // each pixel takes its 4x4 block's centre, within half a step
+      const double raw = keyframe.depth.at<uint16_t>(v - v % 4 + 2, u - u % 4 + 2), out = back->depth.at<uint16_t>(v, u);
+      ASSERT_EQ(raw == 0, out == 0);
+      if (raw > 0) {
+        ASSERT_LE(std::abs(5000 / out - 5000 / raw), 0.5e-3 + 0.5 * 5000 / (out * out)) << u << "," << v;
+      }
+    }
+  }
+}
+
 TEST(LcmConversions, StatusRoundTrip) {
   ComponentStatus status{5, "rgbd-tracker", "tracking", {{"frames", 10}, {"bad_messages", 1}}, {{"track_ms", 3.5}}};
   auto back = fromLcm(toLcm(status));

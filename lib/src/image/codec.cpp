@@ -1,8 +1,11 @@
 #include "rgbdslam/image/codec.h"
 
 #include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
@@ -127,6 +130,128 @@ Expected<cv::Mat> decompressDepth(const uint8_t* data, size_t size, int width, i
   if (out_size != expected_size) {
     return Error{"depth inflates to " + std::to_string(out_size) + " bytes, expected " +
                  std::to_string(expected_size)};
+  }
+  return depth;
+}
+
+}  // namespace rgbdslam
+
+namespace rgbdslam {
+namespace {
+
+// The median edge detector of LOCO-I (JPEG-LS) where the three neighbours hold readings,
+// else the one valid neighbour (left first), else 0.
+inline int predictInverse(int left, int above, int above_left) {
+  if (left && above && above_left) {
+    const int high = std::max(left, above), low = std::min(left, above);
+    if (above_left >= high) return low;
+    if (above_left <= low) return high;
+    return left + above - above_left;
+  }
+  return left ? left : above;
+}
+
+inline uint16_t zigzag(uint16_t value, uint16_t prediction) {
+  const int16_t r = static_cast<int16_t>(static_cast<uint16_t>(value - prediction));
+  return static_cast<uint16_t>((static_cast<uint16_t>(r) << 1) ^ static_cast<uint16_t>(r >> 15));
+}
+
+inline uint16_t unzigzag(uint16_t code, uint16_t prediction) {
+  const uint16_t r = static_cast<uint16_t>((code >> 1) ^ static_cast<uint16_t>(-(code & 1)));
+  return static_cast<uint16_t>(prediction + r);
+}
+
+constexpr double kMaxInverseStep = 10.0;  // [1/m]
+
+bool validInverseStep(double step) { return std::isfinite(step) && step > 0.0 && step <= kMaxInverseStep; }
+
+}  // namespace
+
+std::vector<uint8_t> compressInverseDepth(const cv::Mat& depth, double depth_scale, double inverse_step) {
+  CV_Assert(depth.type() == CV_16UC1 && validInverseStep(inverse_step) && depth_scale > 0);
+  const int w = depth.cols, h = depth.rows;
+  // The nearest reading must fit in 16 bits: a step too fine for it is widened (the stream
+  // carries the step used).
+  double nearest_raw = 65535;
+  for (int v = 0; v < h; ++v) {
+    const uint16_t* in = depth.ptr<uint16_t>(v);
+    for (int u = 0; u < w; ++u) {
+      if (in[u] != 0) nearest_raw = std::min<double>(nearest_raw, in[u]);
+    }
+  }
+  inverse_step = std::min(kMaxInverseStep, std::max(inverse_step, depth_scale / (65535.0 * nearest_raw) * (1 + 1e-6)));
+  cv::Mat q(h, w, CV_16UC1);
+  const double numerator = depth_scale / inverse_step;  // q = (scale / raw) / step
+  for (int v = 0; v < h; ++v) {
+    const uint16_t* in = depth.ptr<uint16_t>(v);
+    uint16_t* out = q.ptr<uint16_t>(v);
+    for (int u = 0; u < w; ++u) {
+      out[u] = in[u] == 0 ? 0 : static_cast<uint16_t>(std::clamp(std::lround(numerator / in[u]), 1L, 65535L));
+    }
+  }
+  const size_t n = static_cast<size_t>(w) * h;
+  std::vector<uint8_t> planes(2 * n);
+  for (int v = 0; v < h; ++v) {
+    const uint16_t* row = q.ptr<uint16_t>(v);
+    const uint16_t* up = v > 0 ? q.ptr<uint16_t>(v - 1) : nullptr;
+    for (int u = 0; u < w; ++u) {
+      const int prediction = predictInverse(u > 0 ? row[u - 1] : 0, up ? up[u] : 0, up && u > 0 ? up[u - 1] : 0);
+      const uint16_t code = zigzag(row[u], static_cast<uint16_t>(prediction));
+      const size_t i = static_cast<size_t>(v) * w + u;
+      planes[i] = static_cast<uint8_t>(code & 0xff);
+      planes[n + i] = static_cast<uint8_t>(code >> 8);
+    }
+  }
+  std::vector<uint8_t> out(4 + ZSTD_compressBound(planes.size()));
+  const float step = static_cast<float>(inverse_step);
+  uint32_t bits;
+  std::memcpy(&bits, &step, 4);
+  for (int i = 0; i < 4; ++i) out[i] = static_cast<uint8_t>(bits >> (8 * i));
+  const size_t packed = ZSTD_compress(out.data() + 4, out.size() - 4, planes.data(), planes.size(), 9);
+  CV_Assert(!ZSTD_isError(packed));  // only on allocation failure: the bound is enough
+  out.resize(4 + packed);
+  return out;
+}
+
+Expected<cv::Mat> decompressInverseDepth(const uint8_t* data, size_t size, int width, int height,
+                                         double depth_scale) {
+  if (width <= 0 || height <= 0) return Error{"bad depth image size"};
+  if (!(depth_scale > 0) || !std::isfinite(depth_scale)) return Error{"bad depth scale"};
+  if (size < 4) return Error{"inverse depth stream of " + std::to_string(size) + " bytes has no step"};
+  uint32_t bits = 0;
+  for (int i = 0; i < 4; ++i) bits |= static_cast<uint32_t>(data[i]) << (8 * i);
+  float step;
+  std::memcpy(&step, &bits, 4);
+  if (!validInverseStep(step)) return Error{"inverse depth step " + std::to_string(step) + " outside (0, 10] 1/m"};
+  const size_t n = static_cast<size_t>(width) * height;
+  const unsigned long long declared = ZSTD_getFrameContentSize(data + 4, size - 4);
+  if (declared == ZSTD_CONTENTSIZE_ERROR) return Error{"inverse depth is not a zstd frame"};
+  if (declared != 2 * n) {
+    return Error{"inverse depth declares " + (declared == ZSTD_CONTENTSIZE_UNKNOWN ? std::string("no") : std::to_string(declared)) +
+                 " bytes, " + std::to_string(width) + "x" + std::to_string(height) + " needs " + std::to_string(2 * n)};
+  }
+  std::vector<uint8_t> planes(2 * n);
+  const size_t got = ZSTD_decompress(planes.data(), planes.size(), data + 4, size - 4);
+  if (ZSTD_isError(got)) return Error{std::string("inverse depth does not decompress: ") + ZSTD_getErrorName(got)};
+  if (got != planes.size()) return Error{"inverse depth decompresses to " + std::to_string(got) + " bytes, expected " + std::to_string(planes.size())};
+  cv::Mat q(height, width, CV_16UC1);
+  for (int v = 0; v < height; ++v) {
+    uint16_t* row = q.ptr<uint16_t>(v);
+    const uint16_t* up = v > 0 ? q.ptr<uint16_t>(v - 1) : nullptr;
+    for (int u = 0; u < width; ++u) {
+      const int prediction = predictInverse(u > 0 ? row[u - 1] : 0, up ? up[u] : 0, up && u > 0 ? up[u - 1] : 0);
+      const size_t i = static_cast<size_t>(v) * width + u;
+      row[u] = unzigzag(static_cast<uint16_t>(planes[i] | (planes[n + i] << 8)), static_cast<uint16_t>(prediction));
+    }
+  }
+  cv::Mat depth(height, width, CV_16UC1);
+  const double numerator = depth_scale / step;  // raw = scale / (q * step)
+  for (int v = 0; v < height; ++v) {
+    const uint16_t* in = q.ptr<uint16_t>(v);
+    uint16_t* out = depth.ptr<uint16_t>(v);
+    for (int u = 0; u < width; ++u) {
+      out[u] = in[u] == 0 ? 0 : static_cast<uint16_t>(std::clamp(std::lround(numerator / in[u]), 1L, 65535L));
+    }
   }
   return depth;
 }
