@@ -38,6 +38,8 @@ void writeMessages(const fs::path& out) {
   write(out / "fuzz_keyframe", "jpeg_quarter_inverse", test::encode(toLcm(keyframe, inverse)));
   inverse.depth_step = 1;
   write(out / "fuzz_keyframe", "jpeg_inverse", test::encode(toLcm(keyframe, inverse)));
+  inverse.depth_step = 8;  // the link budget's last rung
+  write(out / "fuzz_keyframe", "jpeg_eighth_inverse", test::encode(toLcm(keyframe, inverse)));
   write(out / "fuzz_map", "snapshot", test::encode(toLcm(test::sampleMapUpdate())));
   MapUpdate delta;
   delta.map_id = 3, delta.version = 4, delta.acked_below = 2;

@@ -92,6 +92,17 @@ std::string sizeText(int width, int height) {
   return std::to_string(width) + "x" + std::to_string(height);
 }
 
+// The pixel and row step of a subsampled keyframe depth format; 1 for the others.
+int subsampledDepthStep(int8_t format) {
+  using K = rgbdslam::keyframe_t;
+  switch (format) {
+    case K::DEPTH_ZLIB_U16_HALF: case K::DEPTH_INVERSE_ZSTD_HALF: return 2;
+    case K::DEPTH_ZLIB_U16_QUARTER: case K::DEPTH_INVERSE_ZSTD_QUARTER: return 4;
+    case K::DEPTH_ZLIB_U16_EIGHTH: case K::DEPTH_INVERSE_ZSTD_EIGHTH: return 8;
+    default: return 1;
+  }
+}
+
 // Raw, zlib or inverse-depth bytes -> CV_16UC1 at depth_scale units per metre; formats as
 // in rgbd_frame_t / keyframe_t.
 Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, int width,
@@ -108,13 +119,13 @@ Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, 
     if (!depth) return Error{"depth: " + depth.error()};
     return depth;
   }
-  if (format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_ZLIB_U16_QUARTER ||
-      format == K::DEPTH_INVERSE_ZSTD_HALF || format == K::DEPTH_INVERSE_ZSTD_QUARTER) {
-    const int step = format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_INVERSE_ZSTD_HALF ? 2 : 4;
+  const int step = subsampledDepthStep(format);
+  if (step > 1) {
     const int sparse_width = (width + step - 1) / step, sparse_height = (height + step - 1) / step;
-    auto sparse = format == K::DEPTH_ZLIB_U16_HALF || format == K::DEPTH_ZLIB_U16_QUARTER
-                      ? decompressDepth(bytes.data(), bytes.size(), sparse_width, sparse_height)
-                      : decompressInverseDepth(bytes.data(), bytes.size(), sparse_width, sparse_height, depth_scale);
+    const bool inverse = format == K::DEPTH_INVERSE_ZSTD_HALF || format == K::DEPTH_INVERSE_ZSTD_QUARTER ||
+                         format == K::DEPTH_INVERSE_ZSTD_EIGHTH;
+    auto sparse = inverse ? decompressInverseDepth(bytes.data(), bytes.size(), sparse_width, sparse_height, depth_scale)
+                          : decompressDepth(bytes.data(), bytes.size(), sparse_width, sparse_height);
     if (!sparse) return Error{"subsampled depth: " + sparse.error()};
     cv::Mat depth(height, width, CV_16UC1);
     for (int v = 0; v < height; ++v) {
@@ -315,14 +326,14 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   msg.grey_size = static_cast<int32_t>(msg.grey.size());
   using K = rgbdslam::keyframe_t;
   const bool inverse = encoding.inverse_depth_step > 0 && keyframe.depth_scale > 0;
+  const int step = encoding.depth_step >= 8 ? 8 : encoding.depth_step >= 4 ? 4 : encoding.depth_step >= 2 ? 2 : 1;
   if (inverse && !keyframe.depth.empty()) {
-    const int step = encoding.depth_step >= 4 ? 4 : encoding.depth_step >= 2 ? 2 : 1;
-    msg.depth_format = step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF : K::DEPTH_INVERSE_ZSTD_QUARTER;
+    msg.depth_format = step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF
+                       : step == 4 ? K::DEPTH_INVERSE_ZSTD_QUARTER : K::DEPTH_INVERSE_ZSTD_EIGHTH;
     msg.depth = compressInverseDepth(step == 1 ? keyframe.depth : subsampleDepth(keyframe.depth, step),
                                      keyframe.depth_scale, encoding.inverse_depth_step);
-  } else if (encoding.depth_step > 1 && !keyframe.depth.empty()) {
-    const int step = encoding.depth_step >= 4 ? 4 : 2;
-    msg.depth_format = step == 2 ? K::DEPTH_ZLIB_U16_HALF : K::DEPTH_ZLIB_U16_QUARTER;
+  } else if (step > 1 && !keyframe.depth.empty()) {
+    msg.depth_format = step == 2 ? K::DEPTH_ZLIB_U16_HALF : step == 4 ? K::DEPTH_ZLIB_U16_QUARTER : K::DEPTH_ZLIB_U16_EIGHTH;
     msg.depth = compressDepth(subsampleDepth(keyframe.depth, step), 6);
   } else {
     encodeDepth(keyframe.depth, true, 1, &msg.depth_format, &msg.depth);

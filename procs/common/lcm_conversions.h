@@ -51,8 +51,8 @@ Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg);
 struct KeyframeEncoding {
   bool jpeg_grey = false;   // false: PNG (lossless); true: JPEG
   int jpeg_quality = 90;    // JPEG quality [1, 100]
-  int depth_step = 1;       // depth at every n-th pixel and row: 1 (all), 2 (DEPTH_ZLIB_U16_HALF)
-                            // or 4 (DEPTH_ZLIB_U16_QUARTER)
+  int depth_step = 1;       // depth at every n-th pixel and row: 1 (all), 2 (DEPTH_*_HALF),
+                            // 4 (DEPTH_*_QUARTER) or 8 (DEPTH_*_EIGHTH)
   // > 0: depth as quantised inverse depth in steps of this [1/m] (DEPTH_INVERSE_ZSTD*,
   // image/codec.h); 0: zlib, lossless.
   double inverse_depth_step = 0.0;

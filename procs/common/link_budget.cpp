@@ -7,8 +7,11 @@ namespace rgbdslam {
 
 void LinkBudgetOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "link_budget_kbps", &kbps, 0.0, 1e6, "kbit/s",
-          "the tracker's average rate on the link (keyframes, re-sends, receipts, status) at most: "
-          "keyframes get coarser (lower JPEG quality) as it is spent, nothing is dropped or delayed (0: no budget; also --link-budget-kbps)");
+          "the link's average rate at most: what the tracker sends (keyframes, re-sends, receipts, status) and, "
+          "with link_budget_counts_maps, the maps it receives; keyframes get coarser (JPEG quality, "
+          "depth resolution) as it is spent, nothing is dropped or delayed (0: no budget; also --link-budget-kbps)");
+  r->bind(s, "link_budget_counts_maps", &counts_received,
+          "the maps the tracker receives count against the budget too (a half-duplex radio shares its rate between both directions)");
   r->bind(s, "link_burst_s", &burst_s, 0.1, 60.0, "s", "the link absorbs a burst of this many seconds of the budget");
   r->bind(s, "keyframe_min_jpeg_quality", &min_jpeg_quality, 1, 100, "",
           "the lowest JPEG quality the budget may choose for a keyframe");
@@ -27,6 +30,15 @@ void LinkBudget::refill(int64_t now_us) {
 
 void LinkBudget::spend(size_t bytes) {
   bytes_sent_ += static_cast<int64_t>(bytes);
+  take(bytes);
+}
+
+void LinkBudget::received(size_t bytes) {
+  bytes_received_ += static_cast<int64_t>(bytes);
+  if (options_.counts_received) take(bytes);
+}
+
+void LinkBudget::take(size_t bytes) {
   if (limited()) tokens_ = std::max(-capacity_bytes_, tokens_ - static_cast<double>(bytes));
 }
 
@@ -46,6 +58,10 @@ std::vector<KeyframeEncoding> encodingLadder(const KeyframeEncoding& best, int m
   }
   while (rung.jpeg_quality > min_jpeg_quality) {
     rung.jpeg_quality = std::max(min_jpeg_quality, rung.jpeg_quality - 15);
+    ladder.push_back(rung);
+  }
+  if (rung.depth_step < 8) {
+    rung.depth_step = 8;
     ladder.push_back(rung);
   }
   return ladder;

@@ -1,6 +1,10 @@
 #pragma once
-// The tracker's share of the radio link (rgbd-tracker --link-budget-kbps N): a token bucket
-// over everything the tracker sends on the link (keyframes, their re-sends, receipts, status).
+// The radio link's budget (rgbd-tracker --link-budget-kbps N): a token bucket over everything
+// the tracker sends on the link (keyframes, their re-sends, receipts, status) and, with
+// counts_received (the default), the map messages it receives: a MAV's radio (a half-duplex
+// telemetry link) shares its rate between both directions, and the 1 Mbit/s is for
+// keyframes and maps together. The tracker cannot slow the maps, so the keyframes take what
+// the maps leave (measured on the full corridor: maps 0.25 Mbit/s of 1.26).
 // Why a bucket: a radio link carries a rate on average and absorbs a short burst (its own
 // queue); the bucket holds link_burst_s seconds of the budget and refills at the budget's
 // rate. Messages that must go although it is empty (below) put it in debt, down to minus its
@@ -11,7 +15,8 @@
 //   - Quality: each keyframe is encoded once, at a rung of a ladder of encodings chosen by
 //     how full the bucket is: the configured encoding while it is at least half full, then
 //     coarser depth (every 4th pixel and row), then JPEG quality in steps of 15 down to
-//     keyframe_min_jpeg_quality, the last rung when the bucket is empty or in debt. The
+//     keyframe_min_jpeg_quality, then depth at every 8th pixel and row: the last rung, when
+//     the bucket is empty or in debt. The
 //     tracker itself tracks against its own full-quality copy; the mapper's measurements in
 //     this keyframe (refinding, epipolar search) use what was sent.
 //   - Re-sends, receipts and status are never held back (they count): the mapper takes
@@ -39,7 +44,8 @@ namespace rgbdslam {
 struct LinkBudgetOptions {
   double kbps = 1000;           // the tracker's average rate on the link at most (0: none) [kbit/s]
   double burst_s = 2.0;         // the bucket holds this many seconds of the budget [s]
-  int min_jpeg_quality = 30;    // the ladder's last rung [1, 100]
+  int min_jpeg_quality = 30;    // the ladder's lowest JPEG quality [1, 100]
+  bool counts_received = true;  // the maps received count against the budget too
   void bind(OptionRegistry* registry, const std::string& section);
 };
 
@@ -51,16 +57,19 @@ class LinkBudget {
   void refill(int64_t now_us);
   // True when a message may go now: no budget, or the bucket is not empty.
   bool open() const { return !limited() || tokens_ > 0; }
-  void spend(size_t bytes);
+  void spend(size_t bytes);     // sent
+  void received(size_t bytes);  // received: counts when counts_received
   // Bucket level / capacity: 1 full, 0 empty, down to -1 in debt (no budget: 1).
   double fill() const;
   int64_t bytesSent() const { return bytes_sent_; }
+  int64_t bytesReceived() const { return bytes_received_; }
 
  private:
   LinkBudgetOptions options_;
   double capacity_bytes_ = 0, tokens_ = 0;
   int64_t last_us_ = -1;
-  int64_t bytes_sent_ = 0;
+  int64_t bytes_sent_ = 0, bytes_received_ = 0;
+  void take(size_t bytes);
 };
 
 // best first; every rung is no larger than the one before on any image.

@@ -28,8 +28,8 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "keyframe image on the link (png is lossless)");
   r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",
           "JPEG quality of keyframe images");
-  r->bind(s, "keyframe_depth", &keyframe_encoding.depth_step, {{"full", 1}, {"half", 2}, {"quarter", 4}},
-          "keyframe depth on the link: every pixel, or every 2nd or 4th pixel and row (the centre of each block)");
+  r->bind(s, "keyframe_depth", &keyframe_encoding.depth_step, {{"full", 1}, {"half", 2}, {"quarter", 4}, {"eighth", 8}},
+          "keyframe depth on the link: every pixel, or every 2nd, 4th or 8th pixel and row (the centre of each block)");
   r->bind(s, "keyframe_depth_step_sigma", &keyframe_depth_step_sigma, 0.0, 2.0, "sigma",
           "keyframe depth on the link as inverse depth in steps of this fraction of the noise "
           "model's depth sigma (rounding adds 0.29 times it in sigma; 0: lossless zlib)");

@@ -26,7 +26,7 @@ CommandLine makeCommandLine() {
   cli.option("map-id", "ID", "this session's map id (> 0); with --load-map the id the mapper serves the file as", "random");
   cli.option("load-map", "FILE", "start from the map in FILE (made with this camera and mode; rgbd-mapper --load-map the same file); "
              "the first frames relocalise in it");
-  cli.option("link-budget-kbps", "N", "the tracker's average rate on the link at most [kbit/s] (0: none); "
+  cli.option("link-budget-kbps", "N", "the link's average rate at most, what the tracker sends and the maps it receives [kbit/s] (0: none); "
              "overrides tracker_node.link_budget_kbps", "the configuration's");
   cli.flag("localise-only", "with --load-map: track in the loaded map, add no keyframes");
   addLcmUrlOption(cli);

@@ -204,6 +204,8 @@ void TrackerNode::resendDue() {
 }
 
 void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  budget_.refill(steadyUs(Clock::now()));
+  budget_.received(buffer->data_size);  // it crossed the link, whatever it holds
   auto msg = decodeMessage<rgbdslam::map_t>(buffer->data, buffer->data_size);
   auto update = msg ? fromLcm(*msg) : Expected<MapUpdate>(Error{msg.error()});
   if (!update) {
@@ -347,10 +349,10 @@ void TrackerNode::printSummary() const {
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
               c.keyframes, keyframesAcked(), keyframesUnacked(), c.keyframe_sends, c.keyframe_bytes);
-  std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nkeyframes_coarser %ld\n"
+  std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nlink_bytes_received %lld\nkeyframes_coarser %ld\n"
               "keyframes_over_budget %ld\n",
-              options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()), c.keyframes_coarser,
-              c.keyframes_over_budget);
+              options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()),
+              static_cast<long long>(budget_.bytesReceived()), c.keyframes_coarser, c.keyframes_over_budget);
   std::printf("map_version_newest_seen %lld\nmapper_losses %ld\n", static_cast<long long>(sync_.follower().newestSeen()),
               sync_.mapperLosses());
   std::printf("map_version %lld\nmaps_received %ld\nmaps_applied %ld\nmaps_stale %ld\nmaps_missing_delta %ld\nmaps_foreign %ld\n",

@@ -79,6 +79,26 @@ TEST(LinkBudget, DebtStopsAtTheCapacitySoQualityComesBack) {
   EXPECT_TRUE(budget.open());
 }
 
+// A half-duplex radio: the maps the tracker receives take from the same bucket, unless the
+// option says the link has a direction for each.
+TEST(LinkBudget, ReceivedMapsCountWhenTheLinkIsShared) {
+  LinkBudgetOptions options;
+  options.kbps = 8;  // 1000 bytes a second
+  options.burst_s = 1.0;
+  LinkBudget shared(options);
+  shared.refill(0);
+  shared.received(500);
+  EXPECT_DOUBLE_EQ(shared.fill(), 0.5);
+  EXPECT_EQ(shared.bytesReceived(), 500);
+  EXPECT_EQ(shared.bytesSent(), 0);
+  options.counts_received = false;
+  LinkBudget both_ways(options);
+  both_ways.refill(0);
+  both_ways.received(500);
+  EXPECT_DOUBLE_EQ(both_ways.fill(), 1.0);
+  EXPECT_EQ(both_ways.bytesReceived(), 500);
+}
+
 TEST(EncodingLadder, RungsFollowTheBucket) {
   EXPECT_EQ(ladderRung(1.0, 4), 0);
   EXPECT_EQ(ladderRung(0.5, 4), 0);
@@ -91,18 +111,21 @@ TEST(EncodingLadder, RungsFollowTheBucket) {
 
 TEST(EncodingLadder, StartsAtTheConfiguredEncodingAndEndsAtTheLowestQuality) {
   const auto ladder = encodingLadder(KeyframeEncoding{false, 90, 1}, 30);
-  ASSERT_EQ(ladder.size(), 7u);  // PNG full, PNG quarter depth, JPEG 90, 75, 60, 45, 30
+  ASSERT_EQ(ladder.size(), 8u);  // PNG full, PNG quarter depth, JPEG 90, 75, 60, 45, 30, then depth 8
   EXPECT_FALSE(ladder[0].jpeg_grey);
   EXPECT_EQ(ladder[0].depth_step, 1);
   EXPECT_EQ(ladder[1].depth_step, 4);
   EXPECT_TRUE(ladder[2].jpeg_grey);
   EXPECT_EQ(ladder.back().jpeg_quality, 30);
+  EXPECT_EQ(ladder.back().depth_step, 8);
+  EXPECT_EQ(ladder[ladder.size() - 2].depth_step, 4);
   const auto from_default = encodingLadder(KeyframeEncoding{true, 75, 4}, 30);
-  ASSERT_EQ(from_default.size(), 4u);  // 75, 60, 45, 30
+  ASSERT_EQ(from_default.size(), 5u);  // 75, 60, 45, 30, 30 with depth 8
   EXPECT_EQ(from_default[1].jpeg_quality, 60);
-  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 4}, 30).size(), 1u);  // already below the floor
-  const auto high_floor = encodingLadder(KeyframeEncoding{false, 90, 4}, 95);  // PNG, then JPEG 95 only
-  ASSERT_EQ(high_floor.size(), 2u);
+  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 4}, 30).size(), 2u);  // below the floor: depth 8 only
+  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 8}, 30).size(), 1u);  // nothing coarser
+  const auto high_floor = encodingLadder(KeyframeEncoding{false, 90, 4}, 95);  // PNG, JPEG 95, depth 8
+  ASSERT_EQ(high_floor.size(), 3u);
   EXPECT_EQ(high_floor[1].jpeg_quality, 95);
 }
 
