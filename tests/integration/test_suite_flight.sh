@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Long flights (issue 10) in CI: the 2-minute flight (synth:flight,minutes=2: 3600 frames at
+# 30 Hz through rooms joined by corridors, up to 2 m/s and 90 deg/s) through the suite split
+# as on a vehicle: scripts/bench-suite runs rgbd-tracker and rgbd-mapper in two network
+# namespaces joined by a veth (link.sh), logs the link and samples both processes' resident
+# memory every 5 s. Bounds, the issue's targets:
+#   - the tracker's resident memory at most 150 MB at every sample;
+#   - the link, both ways (keyframes, maps, receipts, status; LCM payload in the link's log,
+#     lcm-log-stats), at most 1 Mbit/s on average: the tracker's link budget (1000 kbit/s,
+#     counting the maps it receives: common/link_budget.h) held.
+# Sanity: every keyframe acknowledged; at least 600 frames posed (the flight's first 20 s,
+# which the batch runner tracks whole; the tracker is then lost for long stretches: open work).
+# Not bounded here: the ATE (real-time runs of the flight spread 0.14-3.7 m: its tracking is
+# open work) and the memory's growth after the first minute (112.8 -> 126.2 MB, measured
+# 2026-11-25: the issue wants it flat).
+# Measured 2026-11-25: tracker peak 126.2 MB, link 0.43 / 0.33 / 0.78 Mbit/s (keyframes /
+# maps / total), 2539 / 3600 posed, 126 s.
+source "$(dirname "$0")/common.sh"
+require_netns
+MAX_TRACKER_MB=150 MAX_LINK_MBIT_S=1.0 BUDGET_KBPS=1000
+
+"$SRC/scripts/bench-suite" --source synth:flight,minutes=2 --out "$WORK/bench" --memory-every 5 \
+    --link-budget-kbps "$BUDGET_KBPS" > "$WORK/bench.log" 2>&1 \
+  || fail "bench-suite failed: $(tail -5 "$WORK/bench.log")"
+dir=$WORK/bench/synth_flight_minutes_2
+value() { awk -v k="$1" '$1 == k {print $2}' "$2"; }
+cat "$dir/figures.txt"
+echo "tracker memory [s: MB]: $(awk 'NR > 1 {printf "%s: %s  ", $1, $2}' "$dir/memory.txt")"
+
+peak=$(value tracker_peak_mb "$dir/figures.txt")
+awk -v p="$peak" -v m="$MAX_TRACKER_MB" 'BEGIN { exit !(p > 0 && p <= m) }' \
+  || fail "the tracker's peak resident memory $peak MB is above $MAX_TRACKER_MB MB"
+total=$(value link_total_mbit_s "$dir/figures.txt")
+awk -v t="$total" -v m="$MAX_LINK_MBIT_S" 'BEGIN { exit !(t > 0 && t <= m) }' \
+  || fail "the link carried $total Mbit/s, above $MAX_LINK_MBIT_S"
+[ "$(value keyframes_unacked "$dir/tracker.out")" = 0 ] || fail "keyframes left unacknowledged"
+poses=$(value poses "$dir/figures.txt")
+[ "$poses" -ge 600 ] || fail "only $poses of 3600 frames posed"
+echo "PASS"
