@@ -190,6 +190,7 @@ void MapperNode::publishStatus() {
                      {"maps_published", c.maps_published},
                      {"snapshots_published", c.snapshots_published},
                      {"snapshots_requested", c.snapshots_asked},
+                     {"snapshots_skipped", c.snapshots_skipped},
                      {"bad_receipts", bad_receipts_.load()},
                      {"receipts_implausible", c.receipts_implausible},
                      {"versions_caught_up", c.versions_caught_up},
@@ -232,7 +233,8 @@ void MapperNode::printSummary() const {
             << c.duplicates << ", out of order " << c.out_of_order << ", foreign map " << c.foreign
             << ", bad messages " << bad_messages_ << ", bad keyframes " << c.refused << "; "
             << c.maps_published << " maps published (" << c.snapshots_published << " snapshots, "
-            << c.snapshots_asked << " asked for by a stuck tracker, " << map_bytes_ << " bytes)";
+            << c.snapshots_asked << " asked for by a stuck tracker, " << c.snapshots_skipped
+            << " fallbacks skipped with the tracker in step, " << map_bytes_ << " bytes)";
   if (c.versions_caught_up > 0 || c.keyframes_skipped > 0) {
     std::cerr << "; the journal had lost versions (caught up with the tracker " << c.versions_caught_up
               << " times) and " << c.keyframes_skipped << " keyframes the tracker no longer held (skipped)";

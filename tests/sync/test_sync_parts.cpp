@@ -147,6 +147,40 @@ TEST(SyncPublisher, SnapshotFirstThenDeltasAtOnceForKeyframesAndRateLimitedForRe
   EXPECT_TRUE(periodic->is_snapshot) << "every snapshot_period_s";
 }
 
+// The fallback snapshot is for a tracker that may be out of step: receipts showing it in
+// step during the period skip it; without receipts (or with a stuck tracker) it goes.
+TEST(SyncPublisher, TheFallbackSnapshotWaitsWhileReceiptsShowTheTrackerInStep) {
+  SmallMap m;
+  MapPublisher publisher(MapPublisherOptions{1.0, 30.0, {}});
+  publisher.start(9, 0);
+  publisher.note(m.changes, /*integrated=*/true);
+  ASSERT_TRUE(publisher.publishDue(m.map, 1, 0)->is_snapshot);  // version 1
+  MapReceipt in_step;
+  in_step.map_id = 9;
+  in_step.applied_version = in_step.newest_version_seen = 1;
+  EXPECT_EQ(publisher.onReceipt(in_step), ReceiptVerdict::kNoted);
+  publisher.note(m.changes, /*integrated=*/true);
+  auto delta = publisher.publishDue(m.map, 1, 31 * kS);
+  ASSERT_TRUE(delta);
+  EXPECT_FALSE(delta->is_snapshot) << "the tracker was in step";
+  EXPECT_EQ(publisher.snapshotsSkipped(), 1);
+  // No receipt during the next period: the fallback goes.
+  publisher.note(m.changes, /*integrated=*/true);
+  auto fallback = publisher.publishDue(m.map, 1, 62 * kS);
+  ASSERT_TRUE(fallback);
+  EXPECT_TRUE(fallback->is_snapshot);
+  // A receipt that saw a version it could not apply is not in step.
+  MapReceipt behind;
+  behind.map_id = 9;
+  behind.applied_version = 2;
+  behind.newest_version_seen = 3;
+  publisher.onReceipt(behind);
+  publisher.note(m.changes, /*integrated=*/true);
+  auto next = publisher.publishDue(m.map, 1, 93 * kS);
+  ASSERT_TRUE(next);
+  EXPECT_TRUE(next->is_snapshot);
+}
+
 // Keyframes faster than map_period_s: each goes out at once with its new points, while the
 // moves of points already published wait for the next refinement and go out once.
 TEST(SyncPublisher, MovesBetweenKeyframesWaitForTheRefinementPeriod) {

@@ -56,6 +56,8 @@ ReceiptVerdict MapPublisher::onReceipt(const MapReceipt& receipt) {
                                receipt.newest_version_seen > last_snapshot_version_;
   same_receipts_ = receipt.applied_version == last_receipt_version_ ? same_receipts_ + 1 : 1;
   last_receipt_version_ = receipt.applied_version;
+  in_step_ = in_step_ || (receipt.applied_version > 0 && receipt.applied_version == receipt.newest_version_seen &&
+                          (receipt.applied_version == version_ || same_receipts_ == 1));
   // Below the last snapshot, the snapshot may still be on its way (a large one over a slow
   // link): give it two more receipt periods before asking again.
   const int needed = receipt.applied_version >= last_snapshot_version_ ? 2 : 4;
@@ -69,7 +71,13 @@ ReceiptVerdict MapPublisher::onReceipt(const MapReceipt& receipt) {
 std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId acked_below,
                                                   int64_t now_us) {
   if (!started()) return std::nullopt;
-  const bool snapshot = snapshot_due_ || elapsed(last_snapshot_us_, now_us, options_.snapshot_period_s);
+  bool fallback = elapsed(fallback_from_us_, now_us, options_.snapshot_period_s);
+  if (fallback && in_step_ && !snapshot_due_) {  // the receipts showed the tracker in step
+    fallback = in_step_ = false;
+    fallback_from_us_ = now_us;
+    ++snapshots_skipped_;
+  }
+  const bool snapshot = snapshot_due_ || fallback;
   const bool refinement_time = elapsed(last_refinement_us_, now_us, options_.map_period_s);
   const bool refinement_due = (!pending_.empty() || ack_due_) && refinement_time;
   if (!snapshot && !integrated_unpublished_ && !refinement_due) return std::nullopt;
@@ -86,7 +94,8 @@ std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId ack
   integrated_unpublished_ = ack_due_ = false;
   if (snapshot) {
     ++snapshots_published_;
-    last_snapshot_us_ = now_us;
+    fallback_from_us_ = now_us;
+    in_step_ = false;
     last_snapshot_version_ = version_;
     snapshot_due_ = false;
     last_receipt_version_ = -1;  // judge the tracker again from its next receipts

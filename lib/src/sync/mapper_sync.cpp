@@ -232,6 +232,7 @@ MapperSync::Counters MapperSync::counters() const {
   c.journal_errors += culled_journal_errors_.load();
   c.snapshots_published = publisher_.snapshotsPublished();
   c.snapshots_asked = publisher_.snapshotsAsked();
+  c.snapshots_skipped = publisher_.snapshotsSkipped();
   return c;
 }
 

@@ -20,7 +20,8 @@ void SyncOptions::bind(OptionRegistry* r) {
   r->bind(s, "map_period_s", &p.map_period_s, 0.0, 3600.0, "s",
           "mapper: refinement deltas at most this often (a newly integrated keyframe's at once)");
   r->bind(s, "snapshot_period_s", &p.snapshot_period_s, 0.1, 86400.0, "s",
-          "mapper: full map snapshots at least this often (also when the tracker is stuck behind a lost delta)");
+          "mapper: a full map snapshot this often as a fallback, unless the tracker's receipts showed it in step "
+          "meanwhile (also one at once when the tracker is stuck behind a lost delta)");
   r->bind(s, "point_move_m", &p.diff.point_move_m, 0.0, 1.0, "m",
           "mapper: a point that moved further than this since last published is sent again");
   r->bind(s, "keyframe_move_m", &p.diff.keyframe_move_m, 0.0, 1.0, "m",

@@ -110,7 +110,7 @@ class MapperSync {
   struct Counters {
     long queued = 0, duplicates = 0, out_of_order = 0, foreign = 0, dropped_queue_full = 0,
          integrated = 0, refused = 0, restored = 0, journal_errors = 0, maps_published = 0,
-         snapshots_published = 0, snapshots_asked = 0, receipts_implausible = 0,
+         snapshots_published = 0, snapshots_asked = 0, snapshots_skipped = 0, receipts_implausible = 0,
          versions_caught_up = 0, keyframes_skipped = 0;
   };
   Counters counters() const;
