@@ -247,6 +247,11 @@ Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg) {
   } else if (msg.colour_format != rgbdslam::rgbd_frame_t::COLOUR_NONE) {
     return Error{"unknown colour format " + std::to_string(msg.colour_format)};
   }
+  // A frame carries its depth whole (raw or zlib); the keyframe formats are not for frames.
+  if (msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_RAW_U16 && msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_ZLIB_U16 &&
+      msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_NONE) {
+    return Error{"depth format " + std::to_string(msg.depth_format) + " is not a frame's (raw, zlib or none)"};
+  }
   auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
   if (!depth) return Error{depth.error()};
   frame.depth = *depth;
@@ -429,6 +434,9 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   keyframe.id = msg.keyframe_id;
   keyframe.T_w_c = *T_w_c;
   if (Status s = decodeGrey(msg, &keyframe); !s) return Error{what + s.error()};
+  if (msg.depth_format != rgbdslam::keyframe_t::DEPTH_NONE) {  // the inverse-depth decoder reads the scale
+    if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{what + s.error()};
+  }
   auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
   if (!depth) return Error{what + depth.error()};
   keyframe.depth = *depth;

@@ -15,8 +15,9 @@
 //   - Quality: each keyframe is encoded once, at a rung of a ladder of encodings chosen by
 //     how full the bucket is: the configured encoding while it is at least half full, then
 //     coarser depth (every 4th pixel and row), then JPEG quality in steps of 15 down to
-//     keyframe_min_jpeg_quality, then depth at every 8th pixel and row: the last rung, when
-//     the bucket is empty or in debt. The
+//     keyframe_min_jpeg_quality, then depth at every 8th pixel and row: the last rung, taken
+//     as the bucket nears empty (below 1 / (2 (rungs - 1)) of its capacity: 12.5 % with
+//     the default 5 rungs) and when it is empty or in debt. The
 //     tracker itself tracks against its own full-quality copy; the mapper's measurements in
 //     this keyframe (refinding, epipolar search) use what was sent.
 //   - Re-sends, receipts and status are never held back (they count): the mapper takes
@@ -42,7 +43,7 @@
 namespace rgbdslam {
 
 struct LinkBudgetOptions {
-  double kbps = 1000;           // the tracker's average rate on the link at most (0: none) [kbit/s]
+  double kbps = 1000;           // the link's average rate at most, both ways as counted (0: none) [kbit/s]
   double burst_s = 2.0;         // the bucket holds this many seconds of the budget [s]
   int min_jpeg_quality = 30;    // the ladder's lowest JPEG quality [1, 100]
   bool counts_received = true;  // the maps received count against the budget too

@@ -21,7 +21,7 @@ constexpr int64_t kMaxImageBytes = int64_t{kMaxImageSide} * kMaxImageSide * 3;  
 // Per keyframe: measurements and new points. A 640x480 keyframe has about 10^3; one per
 // pixel of a 1 Mpixel image is far beyond what the tracker (fine_max_points <= 10^5) makes.
 constexpr int32_t kMaxKeyframePoints = 1 << 20;
-// Per map message: keyframes (poses, acknowledged ids). One keyframe a frame at 30 Hz for
+// Per map message: keyframes (poses, removed ids). One keyframe a frame at 30 Hz for
 // 9 hours; the full 110 m corridor has a few hundred.
 constexpr int32_t kMaxMapKeyframes = 1 << 20;
 // Per map message: new, moved and removed points. 2^22 (37 bytes each: 155 MB) is 16x the

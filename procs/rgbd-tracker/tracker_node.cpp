@@ -245,8 +245,9 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
       return;
     case MapVerdict::kImplausible:
       ++counters_.maps_implausible;
-      std::cerr << "rgbd-tracker: ignoring map version " << update->version << ": implausibly far ahead of "
-                << holding << "\n";
+      std::cerr << "rgbd-tracker: ignoring map version " << update->version << ": implausible (more than "
+                << MapFollower::kDefaultMaxVersionStep << " versions ahead of " << holding
+                << ", or acknowledging keyframes below " << update->acked_below << " of which this tracker sent fewer)\n";
       return;
   }
   for (auto it = created_.begin(); it != created_.end() && it->first < update->acked_below; it = created_.erase(it)) {

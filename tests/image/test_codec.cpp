@@ -92,7 +92,7 @@ TEST(Codec, BadInverseDepthStreamsAreErrors) {
   auto longer = bytes;
   longer.push_back(0);
   EXPECT_FALSE(decompressInverseDepth(longer.data(), longer.size(), 64, 48, 1000.0)) << "trailing byte";
-  for (float step : {0.0f, -1.0f, 11.0f, std::numeric_limits<float>::quiet_NaN()}) {
+  for (float step : {0.0f, -1.0f, 11.0f, 1e-45f, std::numeric_limits<float>::quiet_NaN()}) {
     auto spoiled = bytes;
     uint32_t bits;
     std::memcpy(&bits, &step, 4);

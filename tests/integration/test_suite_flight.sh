@@ -13,8 +13,8 @@
 # Not bounded here: the ATE (real-time runs of the flight spread 0.14-3.7 m: its tracking is
 # open work) and the memory's growth after the first minute (112.8 -> 126.2 MB, measured
 # 2026-11-25: the issue wants it flat).
-# Measured 2026-11-25: tracker peak 126.2 MB, link 0.43 / 0.33 / 0.78 Mbit/s (keyframes /
-# maps / total), 2539 / 3600 posed, 126 s.
+# Measured 2026-11-25 (one run of this test): tracker peak 126.2 MB, link 0.43 / 0.33 / 0.78
+# Mbit/s (keyframes / maps / total), 2539 / 3600 posed, 126 s.
 source "$(dirname "$0")/common.sh"
 require_netns
 MAX_TRACKER_MB=150 MAX_LINK_MBIT_S=1.0 BUDGET_KBPS=1000
@@ -27,7 +27,9 @@ value() { awk -v k="$1" '$1 == k {print $2}' "$2"; }
 cat "$dir/figures.txt"
 echo "tracker memory [s: MB]: $(awk 'NR > 1 {printf "%s: %s  ", $1, $2}' "$dir/memory.txt")"
 
-peak=$(value tracker_peak_mb "$dir/figures.txt")
+# The larger of the sampled peak and the tracker's own VmHWM at exit (a spike between samples).
+peak=$(awk -v a="$(value tracker_peak_mb "$dir/figures.txt")" -v b="$(value peak_rss_mb "$dir/tracker.out")" \
+  'BEGIN { print (b + 0 > a + 0) ? b : a }')
 awk -v p="$peak" -v m="$MAX_TRACKER_MB" 'BEGIN { exit !(p > 0 && p <= m) }' \
   || fail "the tracker's peak resident memory $peak MB is above $MAX_TRACKER_MB MB"
 total=$(value link_total_mbit_s "$dir/figures.txt")

@@ -57,6 +57,24 @@ TEST(LcmConversions, FrameWithLyingSizesIsRejected) {
   EXPECT_FALSE(fromLcm(msg));
 }
 
+// Review finding: frames shared the keyframes' depth decoder, so a frame could carry an
+// inverse-depth stream of a huge declared size in a few kB. A frame's depth is raw or zlib.
+TEST(LcmConversions, FrameWithAKeyframeDepthFormatIsRejected) {
+  KeyframeData keyframe;
+  keyframe.grey = cv::Mat(48, 64, CV_8UC1, cv::Scalar(90));
+  keyframe.depth = cv::Mat(48, 64, CV_16UC1, cv::Scalar(5000));
+  KeyframeEncoding encoding{true, 80, 1};
+  encoding.inverse_depth_step = 1e-3;
+  const rgbdslam::keyframe_t kf = toLcm(keyframe, encoding);
+  rgbdslam::rgbd_frame_t msg = toLcm(makeFrame(), FrameEncoding{});
+  msg.depth_format = kf.depth_format;
+  msg.depth = kf.depth;
+  msg.depth_size = kf.depth_size;
+  auto back = fromLcm(msg);
+  ASSERT_FALSE(back);
+  EXPECT_NE(back.error().find("not a frame's"), std::string::npos) << back.error();
+}
+
 TEST(LcmConversions, TruncatedOversizedAndWrongTypeMessagesAreRejected) {
   const auto bytes = encode(toLcm(makeFrame(), FrameEncoding{}));
   for (size_t cut : {size_t{0}, size_t{4}, size_t{20}, bytes.size() / 2, bytes.size() - 1}) {

@@ -6,6 +6,7 @@
 #include "rgbdslam/sync/map_follower.h"
 #include "rgbdslam/sync/map_publisher.h"
 #include "rgbdslam/sync/memory_link.h"
+#include "rgbdslam/sync/tracker_sync.h"
 
 namespace rgbdslam {
 namespace {
@@ -116,6 +117,24 @@ struct SmallMap {
   }
 };
 
+// Review finding: one forged map acknowledging far ahead emptied the outbox and marked every
+// provisional keyframe acknowledged for good.
+TEST(SyncTracker, AMapAcknowledgingKeyframesNeverSentIsImplausible) {
+  TrackerSync<int> tracker(9, KeyframeOutboxOptions{});
+  for (KeyframeId id = 0; id < 3; ++id) tracker.send(id, 100 + static_cast<int>(id), 0);
+  MapUpdate forged;
+  forged.map_id = 9, forged.version = 1, forged.is_snapshot = true, forged.acked_below = 1000;
+  bool applied = false;
+  const auto r = tracker.receive(forged, kS, [&](const MapUpdate&) { return applied = true; });
+  EXPECT_EQ(r.verdict, MapVerdict::kImplausible);
+  EXPECT_FALSE(applied);
+  EXPECT_EQ(tracker.outbox().size(), 3u) << "nothing acknowledged";
+  MapUpdate genuine = forged;
+  genuine.acked_below = 3;
+  EXPECT_EQ(tracker.receive(genuine, kS, [](const MapUpdate&) { return true; }).verdict, MapVerdict::kApply);
+  EXPECT_TRUE(tracker.outbox().empty());
+}
+
 TEST(SyncPublisher, SnapshotFirstThenDeltasAtOnceForKeyframesAndRateLimitedForRefinement) {
   SmallMap m;
   MapPublisher publisher(MapPublisherOptions{1.0, 30.0, {}});
@@ -192,7 +211,7 @@ TEST(SyncPublisher, MovesBetweenKeyframesWaitForTheRefinementPeriod) {
   MapPoint fresh;
   fresh.id = 3, fresh.p_w = Vec3(0, 0, 3), fresh.source_keyframe = 0;
   m.map.addPoint(fresh);
-  m.map.point(1)->p_w.x() += 0.01;
+  m.map.point(1)->p_w.x() += 0.004;  // 4 mm: above the threshold, below ten of them
   MapChanges second;
   second.points = {1, 3};
   publisher.note(second, /*integrated=*/true);
@@ -201,7 +220,7 @@ TEST(SyncPublisher, MovesBetweenKeyframesWaitForTheRefinementPeriod) {
   ASSERT_EQ(keyframe->points.size(), 1u);
   EXPECT_EQ(keyframe->points[0].id, 3);
   EXPECT_TRUE(keyframe->moved_points.empty()) << "the move waits";
-  m.map.point(1)->p_w.x() += 0.01;  // moved again before the refinement
+  m.map.point(1)->p_w.x() += 0.004;  // moved again before the refinement
   publisher.note(second, /*integrated=*/true);
   auto next = publisher.publishDue(m.map, 3, kS / 2);
   ASSERT_TRUE(next);
@@ -211,8 +230,17 @@ TEST(SyncPublisher, MovesBetweenKeyframesWaitForTheRefinementPeriod) {
   ASSERT_TRUE(refinement) << "the held moves are due after map_period_s";
   ASSERT_EQ(refinement->moved_points.size(), 1u);
   EXPECT_EQ(refinement->moved_points[0].id, 1);
-  EXPECT_DOUBLE_EQ(refinement->moved_points[0].p_w.x(), 0.02) << "once, at its latest position";
+  EXPECT_DOUBLE_EQ(refinement->moved_points[0].p_w.x(), 0.008) << "once, at its latest position";
   EXPECT_FALSE(publisher.publishDue(m.map, 3, 3 * kS)) << "nothing is left";
+  // A correction of more than ten thresholds (a loop closure) is not held.
+  m.map.point(2)->p_w.y() += 0.05;
+  MapChanges closure;
+  closure.points = {2};
+  publisher.note(closure, /*integrated=*/true);
+  auto corrected = publisher.publishDue(m.map, 4, 3 * kS + 1);
+  ASSERT_TRUE(corrected);
+  ASSERT_EQ(corrected->moved_points.size(), 1u);
+  EXPECT_EQ(corrected->moved_points[0].id, 2);
 }
 
 TEST(SyncPublisher, ReceiptsShowingAStuckTrackerBringASnapshot) {

@@ -161,14 +161,22 @@ inline uint16_t unzigzag(uint16_t code, uint16_t prediction) {
   return static_cast<uint16_t>(prediction + r);
 }
 
-constexpr double kMaxInverseStep = 10.0;  // [1/m]
+constexpr double kMinInverseStep = 1e-7, kMaxInverseStep = 10.0;  // [1/m]
 
-bool validInverseStep(double step) { return std::isfinite(step) && step > 0.0 && step <= kMaxInverseStep; }
+bool validInverseStep(double step) {
+  return std::isfinite(step) && step >= kMinInverseStep && step <= kMaxInverseStep;
+}
+
+// round(numerator / value) within [1, 65535], clamped in double (no overflow on any input).
+inline uint16_t quotient16(double numerator, uint16_t value) {
+  return static_cast<uint16_t>(std::lround(std::clamp(numerator / value, 1.0, 65535.0)));
+}
 
 }  // namespace
 
 std::vector<uint8_t> compressInverseDepth(const cv::Mat& depth, double depth_scale, double inverse_step) {
-  CV_Assert(depth.type() == CV_16UC1 && validInverseStep(inverse_step) && depth_scale > 0);
+  CV_Assert(depth.type() == CV_16UC1 && std::isfinite(inverse_step) && inverse_step > 0 && depth_scale > 0);
+  inverse_step = std::clamp(inverse_step, kMinInverseStep, kMaxInverseStep);
   const int w = depth.cols, h = depth.rows;
   // The nearest reading must fit in 16 bits: a step too fine for it is widened (the stream
   // carries the step used).
@@ -180,13 +188,14 @@ std::vector<uint8_t> compressInverseDepth(const cv::Mat& depth, double depth_sca
     }
   }
   inverse_step = std::min(kMaxInverseStep, std::max(inverse_step, depth_scale / (65535.0 * nearest_raw) * (1 + 1e-6)));
+  inverse_step = static_cast<float>(inverse_step);  // as the stream carries it: both ends divide by the same step
   cv::Mat q(h, w, CV_16UC1);
   const double numerator = depth_scale / inverse_step;  // q = (scale / raw) / step
   for (int v = 0; v < h; ++v) {
     const uint16_t* in = depth.ptr<uint16_t>(v);
     uint16_t* out = q.ptr<uint16_t>(v);
     for (int u = 0; u < w; ++u) {
-      out[u] = in[u] == 0 ? 0 : static_cast<uint16_t>(std::clamp(std::lround(numerator / in[u]), 1L, 65535L));
+      out[u] = in[u] == 0 ? 0 : quotient16(numerator, in[u]);
     }
   }
   const size_t n = static_cast<size_t>(w) * h;
@@ -222,7 +231,7 @@ Expected<cv::Mat> decompressInverseDepth(const uint8_t* data, size_t size, int w
   for (int i = 0; i < 4; ++i) bits |= static_cast<uint32_t>(data[i]) << (8 * i);
   float step;
   std::memcpy(&step, &bits, 4);
-  if (!validInverseStep(step)) return Error{"inverse depth step " + std::to_string(step) + " outside (0, 10] 1/m"};
+  if (!validInverseStep(step)) return Error{"inverse depth step " + std::to_string(step) + " outside [1e-7, 10] 1/m"};
   const size_t n = static_cast<size_t>(width) * height;
   const unsigned long long declared = ZSTD_getFrameContentSize(data + 4, size - 4);
   if (declared == ZSTD_CONTENTSIZE_ERROR) return Error{"inverse depth is not a zstd frame"};
@@ -250,7 +259,7 @@ Expected<cv::Mat> decompressInverseDepth(const uint8_t* data, size_t size, int w
     const uint16_t* in = q.ptr<uint16_t>(v);
     uint16_t* out = depth.ptr<uint16_t>(v);
     for (int u = 0; u < width; ++u) {
-      out[u] = in[u] == 0 ? 0 : static_cast<uint16_t>(std::clamp(std::lround(numerator / in[u]), 1L, 65535L));
+      out[u] = in[u] == 0 ? 0 : quotient16(numerator, in[u]);
     }
   }
   return depth;

@@ -14,13 +14,19 @@ void MapChanges::merge(const MapChanges& later) {
   removed_points.insert(later.removed_points.begin(), later.removed_points.end());
 }
 
+// A move this many times its threshold (a loop closure's correction) is never held back: the
+// tracker would track up to a refinement period against a map corrected only in part.
+constexpr double kHoldAtMost = 10.0;
+
 MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes, MapChanges* held_back) {
   MapUpdate update;
   for (KeyframeId id : changes.keyframes) {  // std::set: id order
     const Keyframe* kf = map.keyframe(id);
     if (!kf) continue;
     auto it = keyframes_.find(id);
-    if (held_back && it != keyframes_.end()) {
+    if (held_back && it != keyframes_.end() &&
+        (kf->T_w_c.translation() - it->second.translation()).norm() <= kHoldAtMost * options_.keyframe_move_m &&
+        kf->T_w_c.rotation().angularDistance(it->second.rotation()) <= kHoldAtMost * options_.keyframe_turn_rad) {
       held_back->keyframes.insert(id);
       continue;
     }
@@ -36,7 +42,8 @@ MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes, MapChanges
     const MapPoint* point = map.point(id);
     if (!point) continue;  // added and removed again since: in neither list
     auto it = points_.find(id);
-    if (held_back && it != points_.end() && it->second.source == point->source_keyframe) {
+    if (held_back && it != points_.end() && it->second.source == point->source_keyframe &&
+        (point->p_w - it->second.p_w).norm() <= kHoldAtMost * options_.point_move_m) {
       held_back->points.insert(id);
     } else if (it == points_.end() || it->second.source != point->source_keyframe) {
       update.points.push_back(point->data());  // new, or re-described (a new patch)

@@ -48,11 +48,11 @@ Expected<cv::Mat> decompressDepth(const uint8_t* data, size_t size, int width, i
 // synthetic corridor 10.8 kB with zlib-6 -> 7.1 kB, flight 7.8 -> 6.0 kB, TUM teddy
 // 10.8 -> 7.0 kB (f 0.5).
 // CV_16UC1 raw depth (0: no reading) at depth_scale units per metre -> stream;
-// inverse_step in (0, 10] [1/m].
+// inverse_step > 0 [1/m], taken within [1e-7, 10].
 std::vector<uint8_t> compressInverseDepth(const cv::Mat& depth, double depth_scale, double inverse_step);
 // Stream -> CV_16UC1 of the given size at depth_scale units per metre (0: no reading);
 // an error for a stream that is cut short, too long, declares another size or a step outside
-// (0, 10] [1/m].
+// [1e-7, 10] [1/m].
 Expected<cv::Mat> decompressInverseDepth(const uint8_t* data, size_t size, int width, int height,
                                          double depth_scale);
 

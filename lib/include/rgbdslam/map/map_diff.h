@@ -34,8 +34,9 @@ class MapDiffer {
   // The entries of 'changes' that differ from the baseline by more than the thresholds, in
   // id order; the returned update has is_snapshot false and no version, map id or
   // acknowledgements. The baseline advances for what is returned. With 'held_back', only
-  // what is new to the baseline (keyframes, points, points re-described) and removals are
-  // taken; the ids of keyframes and points that could only have moved go to *held_back.
+  // what is new to the baseline (keyframes, points, points re-described), removals and moves
+  // of more than 10 times their threshold (a loop closure's correction) are taken; the ids
+  // of keyframes and points that only moved less go to *held_back.
   MapUpdate delta(const Map& map, const MapChanges& changes, MapChanges* held_back = nullptr);
   // The whole map; the baseline becomes the map.
   MapUpdate snapshot(const Map& map);

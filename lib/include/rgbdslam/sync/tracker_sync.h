@@ -52,6 +52,13 @@ class TrackerSync {
     if (result.verdict == MapVerdict::kForeignMap || result.verdict == MapVerdict::kImplausible) {
       return result;
     }
+    // A map cannot acknowledge keyframes this tracker never sent: one that does is forged or
+    // corrupt, and believing it would empty the outbox and mark the replica's provisional
+    // keyframes acknowledged for good.
+    if (update.acked_below > keyframes_created_) {
+      result.verdict = MapVerdict::kImplausible;
+      return result;
+    }
     if (update.version < acks_from_version_) return result;
     const KeyframeId acked_below = update.acked_below;
     if (result.verdict == MapVerdict::kApply && acked_below < acked_below_) {
