@@ -908,8 +908,13 @@ void Tracker::Impl::warmUpVocabulary() {
     projectVocabulary();
     ready->store(true);
     // The training's frames (~20 MB) are freed by now: give what malloc keeps of them back
-    // to the system (every arena; once per tracker, off the frame path).
+    // to the system (every arena; once per tracker, off the frame path). Not under
+    // AddressSanitizer, whose allocator is not glibc's: glibc's malloc_trim then set up an
+    // arena for this thread that its exit handler found inconsistent ("malloc assertion
+    // failure in __malloc_arena_thread_freeres", DepthAlignment test, scripts/sanitize).
+#ifndef __SANITIZE_ADDRESS__
     malloc_trim(0);
+#endif
   });
 }
 
