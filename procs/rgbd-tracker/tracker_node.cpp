@@ -14,6 +14,11 @@ namespace {
 constexpr int kLoopTimeoutMs = 20;  // [ms] longest wait for a message between timer checks
 constexpr int kEncodingPollMs = 1;  // [ms] the same while a keyframe is being encoded (1-5 ms)
 constexpr int kMaxHandlePerLoop = 64;  // messages handled before tracking the newest frame
+// Map versions received while frames wait: applied once no frame waits (map versions come
+// about once a keyframe and once a second). When this many wait, the oldest is applied as
+// the next arrives: a tracker that stays behind still takes them, and a flood of map
+// messages holds no more than this many decoded.
+constexpr size_t kMaxPendingMaps = 8;
 
 double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
@@ -85,8 +90,9 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   return sync_.outbox().empty() && encoding_.empty() ? 0 : 1;
 }
 
-// Handles everything that has arrived (map messages at once; frames into the backlog), then
-// tracks the oldest frame of the backlog.
+// Handles everything that has arrived (frames into the backlog, map versions checked and
+// queued), then tracks the oldest frame of the backlog; map versions are applied when no
+// frame waits (issue 10, item 6: a frame does not wait for a map update).
 void TrackerNode::handleAvailable(int timeout_ms) {
   const int count = local_ == link_ ? 1 : 2;
   for (int round = 0; round < kMaxHandlePerLoop; ++round) {
@@ -95,10 +101,18 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     if (fds[0].revents & POLLIN) local_->handle();
     if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
   }
-  if (backlog_.empty()) return;
-  Received received = std::move(backlog_.front());
-  backlog_.pop_front();
-  trackFrame(received);
+  if (!backlog_.empty()) {
+    Received received = std::move(backlog_.front());
+    backlog_.pop_front();
+    trackFrame(received);
+  }
+  while (backlog_.empty() && !pending_maps_.empty()) applyOldestMap();
+}
+
+void TrackerNode::applyOldestMap() {
+  const MapUpdate update = std::move(pending_maps_.front());
+  pending_maps_.pop_front();
+  applyMap(update);
 }
 
 void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
@@ -121,7 +135,7 @@ void TrackerNode::trackFrame(const Received& received) {
     return;
   }
   ++counters_.frames;
-  TrackResult result = tracker_.track(*frame);
+  TrackResult result = tracker_.trackPose(*frame);
   if (result.status == TrackResult::Status::kBadFrame) {
     ++counters_.bad_frames;
     std::cerr << "rgbd-tracker: frame " << frame->seq << " skipped: " << result.error << "\n";
@@ -147,6 +161,11 @@ void TrackerNode::trackFrame(const Received& received) {
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
   if (result.new_keyframe) sendKeyframe(std::move(*result.new_keyframe));
+  // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
+  const auto start = Clock::now();
+  std::optional<KeyframeData> keyframe = tracker_.finishFrame();
+  after_pose_ms_.add(msBetween(start, Clock::now()));
+  if (keyframe) sendKeyframe(std::move(*keyframe));
 }
 
 // The rung is chosen now, from the bucket as it is; the encoding (JPEG, zlib, LCM: a few ms)
@@ -214,13 +233,22 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
     return;
   }
   ++counters_.maps_received;
+  if (pending_maps_.size() >= kMaxPendingMaps) applyOldestMap();
+  pending_maps_.push_back(std::move(*update));
+}
+
+void TrackerNode::applyMap(const MapUpdate& update) {
   const auto now = Clock::now();
-  const MapReceiveResult r = sync_.receive(*update, steadyUs(now),
-                                           [this](const MapUpdate& u) { return tracker_.applyMap(u); });
+  const MapReceiveResult r = sync_.receive(update, steadyUs(now), [this](const MapUpdate& u) {
+    const auto start = Clock::now();
+    const bool known = tracker_.applyMap(u);
+    map_apply_ms_.add(msBetween(start, Clock::now()));
+    return known;
+  });
   for (double age_s : r.ack_latencies_s) ack_ms_.add(age_s * 1000.0);
   const int64_t holding = sync_.follower().version();
   if (r.resent_after_loss > 0) {
-    std::cerr << "rgbd-tracker: the mapper lost acknowledged keyframes (map version " << update->version
+    std::cerr << "rgbd-tracker: the mapper lost acknowledged keyframes (map version " << update.version
               << " acknowledges fewer); sending the " << r.resent_after_loss << " it still holds again\n";
   }
   switch (r.verdict) {
@@ -230,27 +258,27 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
       break;
     case MapVerdict::kStale:
       ++counters_.maps_stale;
-      std::cerr << "rgbd-tracker: ignoring stale map version " << update->version << " (holding " << holding
+      std::cerr << "rgbd-tracker: ignoring stale map version " << update.version << " (holding " << holding
                 << "; a repeat, or from the past)\n";
       return;
     case MapVerdict::kMissingDelta:
       ++counters_.maps_missing_delta;
-      std::cerr << "rgbd-tracker: map version " << update->version << " is a delta after a lost one (holding "
+      std::cerr << "rgbd-tracker: map version " << update.version << " is a delta after a lost one (holding "
                 << holding << "); waiting for a snapshot\n";
       return;
     case MapVerdict::kForeignMap:
       ++counters_.maps_foreign;
-      std::cerr << "rgbd-tracker: ignoring map version " << update->version << " of map " << update->map_id
+      std::cerr << "rgbd-tracker: ignoring map version " << update.version << " of map " << update.map_id
                 << " (this tracker's map is " << map_id_ << ")\n";
       return;
     case MapVerdict::kImplausible:
       ++counters_.maps_implausible;
-      std::cerr << "rgbd-tracker: ignoring map version " << update->version << ": implausible (more than "
+      std::cerr << "rgbd-tracker: ignoring map version " << update.version << ": implausible (more than "
                 << MapFollower::kDefaultMaxVersionStep << " versions ahead of " << holding
-                << ", or acknowledging keyframes below " << update->acked_below << " of which this tracker sent fewer)\n";
+                << ", or acknowledging keyframes below " << update.acked_below << " of which this tracker sent fewer)\n";
       return;
   }
-  for (auto it = created_.begin(); it != created_.end() && it->first < update->acked_below; it = created_.erase(it)) {
+  for (auto it = created_.begin(); it != created_.end() && it->first < update.acked_below; it = created_.erase(it)) {
     in_map_ms_.add(msBetween(it->second, now));
   }
 }
@@ -320,6 +348,10 @@ void TrackerNode::publishStatus() {
                        {"arrival_ms_median", arrival_ms_.quantile(0.5)},
                        {"frame_ms_median", frame_ms_.quantile(0.5)},
                        {"frame_ms_p99", frame_ms_.quantile(0.99)},
+                       {"after_pose_ms_median", after_pose_ms_.quantile(0.5)},
+                       {"after_pose_ms_max", after_pose_ms_.quantile(1.0)},
+                       {"map_apply_ms_median", map_apply_ms_.quantile(0.5)},
+                       {"map_apply_ms_max", map_apply_ms_.quantile(1.0)},
                        {"keyframe_encode_ms_median", encode_ms_.quantile(0.5)},
                        {"keyframe_encode_ms_max", encode_ms_.quantile(1.0)},
                        {"keyframe_ack_ms_median", ack_ms_.quantile(0.5)},
@@ -363,6 +395,10 @@ void TrackerNode::printSummary() const {
               frame_ms_.quantile(0.5), frame_ms_.quantile(0.99));
   std::printf("track_ms_median %.3f\ntrack_ms_p99 %.3f\nlatency_ms_median %.3f\nlatency_ms_p99 %.3f\n",
               track_ms_.quantile(0.5), track_ms_.quantile(0.99), latency_ms_.quantile(0.5), latency_ms_.quantile(0.99));
+  std::printf("after_pose_ms_median %.2f\nafter_pose_ms_p99 %.2f\nafter_pose_ms_max %.2f\n", after_pose_ms_.quantile(0.5),
+              after_pose_ms_.quantile(0.99), after_pose_ms_.quantile(1.0));
+  std::printf("map_apply_ms_median %.2f\nmap_apply_ms_p99 %.2f\nmap_apply_ms_max %.2f\n", map_apply_ms_.quantile(0.5),
+              map_apply_ms_.quantile(0.99), map_apply_ms_.quantile(1.0));
   std::printf("keyframe_encode_ms_median %.2f\nkeyframe_encode_ms_max %.2f\n", encode_ms_.quantile(0.5),
               encode_ms_.quantile(1.0));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",

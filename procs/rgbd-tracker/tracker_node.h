@@ -7,15 +7,17 @@
 //   and counted (a real-time tracker must not fall behind the camera: latency stays bounded
 //   by the backlog, while one slow frame, e.g. a keyframe's, costs no pose). SLAM_POSE for
 //   every tracked frame (its state says tracking / dodgy / lost / relocalised /
-//   initialising).
+//   initialising), as soon as the pose is known: the frame's keyframe and local map follow
+//   it (Tracker::trackPose, finishFrame; issue 10, item 6).
 //   SLAM_KEYFRAME (link): a new keyframe is encoded once, at the rung of the encoding ladder
 //   the link budget allows (common/link_budget.h), on a second thread (the encoder: JPEG,
 //   zlib and LCM encoding leave the frame path, issue 10 item 6; this thread publishes it
 //   when it is done, in creation order, polling every 1 ms meanwhile), and handed to
 //   TrackerSync when it goes out, which keeps it and says when to re-send it until a map
 //   message acknowledges it. No keyframe waits for the budget.
-//   SLAM_MAP (link): TrackerSync takes the acknowledgements and says whether the content is
-//   applied to the replica.
+//   SLAM_MAP (link): checked when it arrives, applied when no frame waits (a frame does not
+//   wait for a map update); TrackerSync takes the acknowledgements and says whether the
+//   content is applied to the replica.
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
 //   SLAM_STATUS (link) every status_period_s: state, counters, timings, queue lengths.
 // Two LCM instances when the link has its own URL (frames never cross the radio link).
@@ -76,6 +78,8 @@ class TrackerNode {
   struct Received;
   void trackFrame(const Received& received);
   void onMap(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void applyMap(const MapUpdate& update);  // a received version: the protocol, the replica
+  void applyOldestMap();                   // of pending_maps_
   void sendKeyframe(KeyframeData keyframe);
   void sendEncoded(Clock::time_point now);
   void publishKeyframe(KeyframeId id, std::vector<uint8_t> bytes, Clock::time_point now);  // first send
@@ -110,6 +114,7 @@ class TrackerNode {
     int64_t recv_utime = 0;  // when LCM received it [us]
   };
   std::deque<Received> backlog_;  // frames received, not yet tracked, oldest first
+  std::deque<MapUpdate> pending_maps_;  // map versions received, not yet applied, oldest first
   Clock::time_point last_frame_{}, last_status_{}, last_receipt_{};
   TrackingState state_ = TrackingState::kInitialising;
   // latency (frame utime to its pose's publication) = arrival (utime to the message's
@@ -117,6 +122,9 @@ class TrackerNode {
   // the tracker's own time per frame: backlog, decoding, tracking, publishing).
   RecentSamples track_ms_, latency_ms_, arrival_ms_, frame_ms_, ack_ms_, in_map_ms_;
   RecentSamples encode_ms_;  // a keyframe's encoding on the encoder thread, off the frame path
+  // Work between frames on this thread, after the pose is out: a frame's keyframe and
+  // local map (Tracker::finishFrame), and applying a map version to the replica.
+  RecentSamples after_pose_ms_, map_apply_ms_;
 
   struct Counters {
     long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,

@@ -468,6 +468,66 @@ TEST(Tracker, ResetStartsANewMap) {
   EXPECT_EQ(result.new_keyframe->id, 0);
 }
 
+// A small local map (4 hot keyframes, the cold ones in memory), so that frames freeze and
+// thaw keyframes too: the work finishFrame() takes off the pose's path.
+TrackerOptions smallLocalMap() {
+  TrackerOptions options;
+  options.local_map.keyframes = 4;
+  options.local_map.store_dir.clear();
+  return options;
+}
+
+bool samePose(const SE3& a, const SE3& b) {
+  return a.translation() == b.translation() && a.rotation().coeffs() == b.rotation().coeffs();
+}
+
+TEST(Tracker, TrackPoseThenFinishFrameIsTrack) {
+  Tracker whole(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
+  Tracker split(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
+  int keyframes = 0;
+  for (size_t i = 0; i < 150; ++i) {
+    const TrackResult a = whole.track(roomFrame(i));
+    TrackResult b = split.trackPose(roomFrame(i));
+    EXPECT_EQ(b.keyframe_due, a.new_keyframe && i > 0) << "frame " << i;  // frame 0's comes at once
+    if (!b.new_keyframe) b.new_keyframe = split.finishFrame();
+    ASSERT_EQ(a.status, b.status) << "frame " << i;
+    EXPECT_TRUE(samePose(a.pose.T_w_c, b.pose.T_w_c)) << "frame " << i;
+    ASSERT_EQ(a.new_keyframe.has_value(), b.new_keyframe.has_value()) << "frame " << i;
+    if (!a.new_keyframe) continue;
+    ++keyframes;
+    EXPECT_EQ(a.new_keyframe->id, b.new_keyframe->id);
+    EXPECT_TRUE(samePose(a.new_keyframe->T_w_c, b.new_keyframe->T_w_c));
+    EXPECT_EQ(a.new_keyframe->new_points.size(), b.new_keyframe->new_points.size());
+    EXPECT_EQ(a.new_keyframe->measurements.size(), b.new_keyframe->measurements.size());
+  }
+  EXPECT_GT(keyframes, 5);  // more than the local map holds: keyframes went cold
+  EXPECT_EQ(whole.map().numKeyframes(), split.map().numKeyframes());
+  EXPECT_EQ(whole.map().numPoints(), split.map().numPoints());
+}
+
+TEST(Tracker, AKeyframeNotFinishedComesWithTheNextFrame) {
+  Tracker whole(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
+  Tracker split(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
+  std::optional<KeyframeId> due;  // made by the frame before, never finished
+  int keyframes = 0;
+  for (size_t i = 0; i < 150; ++i) {
+    const TrackResult a = whole.track(roomFrame(i));
+    const TrackResult b = split.trackPose(roomFrame(i));
+    ASSERT_EQ(a.status, b.status) << "frame " << i;
+    if (due) {
+      ASSERT_TRUE(b.new_keyframe) << "frame " << i;
+      EXPECT_EQ(b.new_keyframe->id, *due);
+    }
+    due.reset();
+    if (a.new_keyframe) {
+      ++keyframes;
+      if (i > 0) due = a.new_keyframe->id;
+    }
+  }
+  EXPECT_GT(keyframes, 5);
+  ASSERT_TRUE(split.finishFrame() || !due);  // the last frame's, if it made one
+}
+
 TEST(Tracker, TracksTumTeddyWithoutMapper) {
   RGBDSLAM_REQUIRE_SHARED_DATA(dir, "tum_fr3_teddy_200");
   const auto camera = loadCamera(sourceDir() + "/config/cameras/tum_fr3.yaml");

@@ -168,13 +168,40 @@ class Tracker::Impl {
 
   TrackResult track(const RgbdFrame& frame) {
     const auto start = std::chrono::steady_clock::now();
+    TrackResult result = trackPose(frame);
+    if (std::optional<KeyframeData> keyframe = finishFrame()) result.new_keyframe = std::move(keyframe);
+    result.track_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return result;
+  }
+
+  TrackResult trackPose(const RgbdFrame& frame) {
+    const auto start = std::chrono::steady_clock::now();
+    std::optional<KeyframeData> late = finishFrame();  // the caller did not finish the last frame
     TrackResult result = trackFrame(frame);
+    if (late) result.new_keyframe = std::move(late);  // trackFrame makes one only when it initialises
     publish(&result, frame.utime);
+    result.keyframe_due = pending_keyframe_.has_value();
     result.track_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     result.pose.utime = frame.utime;
     result.pose.seq = frame.seq;
     return result;
+  }
+
+  // In the order track() always did them: the keyframe first, then the local map around
+  // the frame's pose (with the new keyframe in it).
+  std::optional<KeyframeData> finishFrame() {
+    std::optional<KeyframeData> data;
+    if (pending_keyframe_) {
+      data = addKeyframe(std::move(*pending_keyframe_));
+      pending_keyframe_.reset();
+    }
+    if (pending_local_map_) {
+      updateLocalMap(*pending_local_map_, options_.local_map.changes_per_frame);
+      pending_local_map_.reset();
+    }
+    return data;
   }
 
   bool applyMap(const MapUpdate& update) {
@@ -217,6 +244,8 @@ class Tracker::Impl {
     last_utime_.reset();
     published_history_.clear();
     depth_reference_.reset();
+    pending_keyframe_.reset();
+    pending_local_map_.reset();
   }
 
  private:
@@ -257,8 +286,16 @@ class Tracker::Impl {
                      std::optional<TrackingState> grade = std::nullopt);
   // Whether the pose is precise enough to be reported good (QualityOptions::good_step_*).
   bool preciseForFlight(const PoseUncertainty& uncertainty) const;
-  KeyframeData addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
-                           std::vector<Measurement> measurements);
+  // What the keyframe decision of a frame keeps until finishFrame() makes the keyframe:
+  // the frame's grey image stays in grey_ until the next frame.
+  struct PendingKeyframe {
+    int64_t utime = 0;
+    SE3 T_w_c;  // the map pose, not the published one
+    std::vector<Measurement> measurements;
+    cv::Mat depth;  // a copy: the caller's frame may be reused
+    double depth_scale = 0.0;
+  };
+  KeyframeData addKeyframe(PendingKeyframe pending);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
   double depthAt(const RgbdFrame& frame, const Eigen::Vector2d& uv) const;
   // The integrity checks of an attempt's pose: the image (photometric_integrity.h, every
@@ -397,6 +434,12 @@ class Tracker::Impl {
   std::vector<std::pair<int64_t, Vec3>> published_history_;
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
 
+  // The last frame's work that its pose did not need, not yet done (finishFrame): its
+  // keyframe, and the local map around its pose (freezing keyframes that left it, thawing
+  // those that came into it: JPEG coding, the store, pyramids).
+  std::optional<PendingKeyframe> pending_keyframe_;
+  std::optional<SE3> pending_local_map_;  // the map pose the local map is centred on
+
   // Per-frame buffers, reused.
   cv::Mat grey_;
   ImagePyramid pyramid_;
@@ -452,7 +495,7 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   have_previous_sbi_ = true;
   tracked.inconsistent = frame_inconsistent_;
   if (tracked.status == TrackResult::Status::kTracked || tracked.status == TrackResult::Status::kRelocalised) {
-    updateLocalMap(tracked.pose.T_w_c, options_.local_map.changes_per_frame);
+    pending_local_map_ = tracked.pose.T_w_c;  // finishFrame
   }
   return tracked;
 }
@@ -1190,7 +1233,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
                                   depthPointsAllowed(mode_, next_keyframe_id_), cornerCount()};
   if (keyframes_allowed_ && shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
-    result.new_keyframe = addKeyframe(frame, result.pose.T_w_c, foundMeasurements(frame));
+    pending_keyframe_ = PendingKeyframe{frame.utime, result.pose.T_w_c, foundMeasurements(frame),
+                                        frame.depth.empty() ? cv::Mat() : frame.depth.clone(), frame.depth_scale};
   }
   return result;
 }
@@ -1341,17 +1385,16 @@ std::vector<Measurement> Tracker::Impl::foundMeasurements(const RgbdFrame& frame
   return measurements;
 }
 
-KeyframeData Tracker::Impl::addKeyframe(const RgbdFrame& frame, const SE3& T_w_c,
-                                        std::vector<Measurement> measurements) {
+KeyframeData Tracker::Impl::addKeyframe(PendingKeyframe pending) {
   KeyframeData data;
-  data.utime = frame.utime;
+  data.utime = pending.utime;
   data.map_id = map_id_;
   data.id = next_keyframe_id_++;
-  data.T_w_c = T_w_c;
+  data.T_w_c = pending.T_w_c;
   data.grey = grey_.clone();
-  data.depth = frame.depth.empty() ? cv::Mat() : frame.depth.clone();
-  data.depth_scale = frame.depth_scale;
-  data.measurements = std::move(measurements);
+  data.depth = std::move(pending.depth);
+  data.depth_scale = pending.depth_scale;
+  data.measurements = std::move(pending.measurements);
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
   std::vector<NewPoint> points;
   if (depthPointsAllowed(mode_, data.id)) {
@@ -1378,6 +1421,8 @@ Tracker::Tracker(const PinholeCamera& camera, const TrackerOptions& options, Sla
     : impl_(std::make_unique<Impl>(camera, options, mode, map_id)) {}
 Tracker::~Tracker() = default;
 TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame); }
+TrackResult Tracker::trackPose(const RgbdFrame& frame) { return impl_->trackPose(frame); }
+std::optional<KeyframeData> Tracker::finishFrame() { return impl_->finishFrame(); }
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }

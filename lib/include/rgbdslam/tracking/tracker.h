@@ -197,7 +197,9 @@ struct TrackResult {
   };
   Status status = Status::kBadFrame;
   PoseEstimate pose;
-  std::optional<KeyframeData> new_keyframe;  // for the mapper, with provisional points
+  std::optional<KeyframeData> new_keyframe;  // made in this call: for the mapper, with provisional points
+  // trackPose() only: this frame makes a keyframe, which finishFrame() makes.
+  bool keyframe_due = false;
   std::string error;                         // for kBadFrame
   std::string lost_reason;                   // for kLost: why ("4 points found", "depth ...")
   // The depth image contradicted this frame's first pose (DepthIntegrityOptions): tracked
@@ -216,7 +218,7 @@ struct TrackResult {
   SE3 map_T_w_c;
   double correction_m = 0.0;    // [m]
   double correction_deg = 0.0;  // [deg]
-  double track_ms = 0.0;                     // time spent in track() [ms]
+  double track_ms = 0.0;                     // time spent in track() or trackPose() [ms]
 };
 
 class Tracker {
@@ -224,6 +226,17 @@ class Tracker {
   Tracker(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id);
   ~Tracker();
   TrackResult track(const RgbdFrame& frame);
+  // track() in two steps, for a process that publishes the pose before the work the pose
+  // does not need (issue 10, item 6): trackPose() returns the pose (keyframe_due set when
+  // the frame makes a keyframe); finishFrame() then makes the keyframe (pyramid, corners,
+  // points from depth: about as long again as tracking the frame) and moves the local map
+  // to the pose (JPEG coding and the store for keyframes going cold, pyramids for those
+  // coming back), and returns the keyframe. Call it before anything else (applyMap, the
+  // next frame); work left undone is done at the start of the next trackPose(), and a
+  // keyframe made there comes in its new_keyframe, so none is lost. track() is the two in
+  // one call, in the same order, with the same results.
+  TrackResult trackPose(const RgbdFrame& frame);
+  std::optional<KeyframeData> finishFrame();
 
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool applyMap(const MapUpdate& update);
