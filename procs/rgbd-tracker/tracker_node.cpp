@@ -15,8 +15,10 @@ constexpr int kLoopTimeoutMs = 20;  // [ms] longest wait for a message between t
 constexpr int kEncodingPollMs = 1;  // [ms] the same while a keyframe is being encoded (1-5 ms)
 constexpr int kMaxHandlePerLoop = 64;  // messages handled before tracking the newest frame
 // Map versions received while frames wait: applied once no frame waits (map versions come
-// about once a keyframe and once a second). When this many wait, the oldest is applied as
-// the next arrives: a tracker that stays behind still takes them, and a flood of map
+// about once a keyframe and once a second), or after waiting this long, so that a tracker
+// that stays behind still takes them (and acknowledges keyframes) within a few frames.
+constexpr double kMaxMapWaitMs = 100.0;
+// ...and when this many wait, the oldest is applied as the next arrives: a flood of map
 // messages holds no more than this many decoded.
 constexpr size_t kMaxPendingMaps = 8;
 
@@ -86,6 +88,7 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
     if (finishing_since == Clock::time_point{}) finishing_since = now;
     if ((sync_.outbox().empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
+  while (!pending_maps_.empty()) applyOldestMap();  // their acknowledgements count
   publishStatus();
   return sync_.outbox().empty() && encoding_.empty() ? 0 : 1;
 }
@@ -106,11 +109,15 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     backlog_.pop_front();
     trackFrame(received);
   }
-  while (backlog_.empty() && !pending_maps_.empty()) applyOldestMap();
+  const auto now = Clock::now();
+  while (!pending_maps_.empty() &&
+         (backlog_.empty() || msBetween(pending_maps_.front().received, now) >= kMaxMapWaitMs)) {
+    applyOldestMap();
+  }
 }
 
 void TrackerNode::applyOldestMap() {
-  const MapUpdate update = std::move(pending_maps_.front());
+  const MapUpdate update = std::move(pending_maps_.front().update);
   pending_maps_.pop_front();
   applyMap(update);
 }
@@ -136,6 +143,7 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   ++counters_.frames;
   TrackResult result = tracker_.trackPose(*frame);
+  if (result.new_keyframe) sendKeyframe(std::move(*result.new_keyframe));  // frame 0's, or one left unfinished
   if (result.status == TrackResult::Status::kBadFrame) {
     ++counters_.bad_frames;
     std::cerr << "rgbd-tracker: frame " << frame->seq << " skipped: " << result.error << "\n";
@@ -160,7 +168,6 @@ void TrackerNode::trackFrame(const Received& received) {
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
-  if (result.new_keyframe) sendKeyframe(std::move(*result.new_keyframe));
   // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
   const auto start = Clock::now();
   std::optional<KeyframeData> keyframe = tracker_.finishFrame();
@@ -234,7 +241,7 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
   }
   ++counters_.maps_received;
   if (pending_maps_.size() >= kMaxPendingMaps) applyOldestMap();
-  pending_maps_.push_back(std::move(*update));
+  pending_maps_.push_back({std::move(*update), Clock::now()});
 }
 
 void TrackerNode::applyMap(const MapUpdate& update) {

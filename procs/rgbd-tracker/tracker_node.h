@@ -15,9 +15,9 @@
 //   when it is done, in creation order, polling every 1 ms meanwhile), and handed to
 //   TrackerSync when it goes out, which keeps it and says when to re-send it until a map
 //   message acknowledges it. No keyframe waits for the budget.
-//   SLAM_MAP (link): checked when it arrives, applied when no frame waits (a frame does not
-//   wait for a map update); TrackerSync takes the acknowledgements and says whether the
-//   content is applied to the replica.
+//   SLAM_MAP (link): decoded when it arrives, applied when no frame waits (a frame does not
+//   wait for a map update) or after 100 ms; TrackerSync takes the acknowledgements and
+//   says whether the content is applied to the replica.
 //   SLAM_MAP_RECEIPT (link) every sync receipt period: the version the tracker holds.
 //   SLAM_STATUS (link) every status_period_s: state, counters, timings, queue lengths.
 // Two LCM instances when the link has its own URL (frames never cross the radio link).
@@ -114,7 +114,11 @@ class TrackerNode {
     int64_t recv_utime = 0;  // when LCM received it [us]
   };
   std::deque<Received> backlog_;  // frames received, not yet tracked, oldest first
-  std::deque<MapUpdate> pending_maps_;  // map versions received, not yet applied, oldest first
+  struct PendingMap {
+    MapUpdate update;
+    Clock::time_point received;
+  };
+  std::deque<PendingMap> pending_maps_;  // map versions decoded, not yet applied, oldest first
   Clock::time_point last_frame_{}, last_status_{}, last_receipt_{};
   TrackingState state_ = TrackingState::kInitialising;
   // latency (frame utime to its pose's publication) = arrival (utime to the message's

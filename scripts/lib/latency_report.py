@@ -4,8 +4,9 @@ timestamp to its pose's publication, every SLAM_POSE message, whatever its state
 
   latency_report.py TRAJECTORY_CSV   key-value figures on stdout [ms]:
     latency_ms_median, latency_ms_p99, latency_ms_max     every frame
-    latency_ms_p99_tracking                               frames tracking or dodgy (not lost
-                                                          nor relocalised: those search the map)
+    latency_ms_p99_tracking                               frames tracking or dodgy (not lost,
+                                                          relocalised or initialising)
+Rows that do not parse (a line cut when the logger was stopped) are skipped.
 The tracker's own summary covers its last 1000 frames only (common/samples.h).
 Standard library only."""
 import csv
@@ -20,8 +21,13 @@ def quantile(values, q):
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
+    rows = []
     with open(sys.argv[1]) as f:
-        rows = [(r["state"], float(r["latency_ms"])) for r in csv.DictReader(f)]
+        for r in csv.DictReader(f):
+            try:
+                rows.append((r["state"], float(r["latency_ms"])))
+            except (KeyError, TypeError, ValueError):
+                continue
     every = [latency for _, latency in rows]
     tracking = [latency for state, latency in rows if state in ("tracking", "dodgy")]
     print("latency_ms_median %.3f" % quantile(every, 0.5))

@@ -481,6 +481,12 @@ bool samePose(const SE3& a, const SE3& b) {
   return a.translation() == b.translation() && a.rotation().coeffs() == b.rotation().coeffs();
 }
 
+size_t coldKeyframes(const Map& map) {
+  size_t cold = 0;
+  for (const auto& [id, keyframe] : map.keyframes()) cold += keyframe->cold() ? 1 : 0;
+  return cold;
+}
+
 TEST(Tracker, TrackPoseThenFinishFrameIsTrack) {
   Tracker whole(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
   Tracker split(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
@@ -497,18 +503,26 @@ TEST(Tracker, TrackPoseThenFinishFrameIsTrack) {
     ++keyframes;
     EXPECT_EQ(a.new_keyframe->id, b.new_keyframe->id);
     EXPECT_TRUE(samePose(a.new_keyframe->T_w_c, b.new_keyframe->T_w_c));
+    // The frame's pose in the map, not the published one (which takes in corrections).
+    EXPECT_TRUE(samePose(b.new_keyframe->T_w_c, b.map_T_w_c)) << "frame " << i;
+    EXPECT_EQ(b.new_keyframe->utime, roomFrame(i).utime);
     EXPECT_EQ(a.new_keyframe->new_points.size(), b.new_keyframe->new_points.size());
     EXPECT_EQ(a.new_keyframe->measurements.size(), b.new_keyframe->measurements.size());
   }
-  EXPECT_GT(keyframes, 5);  // more than the local map holds: keyframes went cold
+  EXPECT_GT(keyframes, 5);
   EXPECT_EQ(whole.map().numKeyframes(), split.map().numKeyframes());
   EXPECT_EQ(whole.map().numPoints(), split.map().numPoints());
+  // finishFrame moved the local map: the keyframes beyond its 4 went cold (a new keyframe
+  // may stay hot a frame longer: 2 changes a frame).
+  EXPECT_GE(coldKeyframes(split.map()), split.map().numKeyframes() - 6);
+  EXPECT_GT(coldKeyframes(split.map()), 0u);
+  EXPECT_EQ(coldKeyframes(whole.map()), coldKeyframes(split.map()));
 }
 
 TEST(Tracker, AKeyframeNotFinishedComesWithTheNextFrame) {
   Tracker whole(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
   Tracker split(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
-  std::optional<KeyframeId> due;  // made by the frame before, never finished
+  std::optional<KeyframeData> due;  // what the frame before made in 'whole'; 'split' never finished it
   int keyframes = 0;
   for (size_t i = 0; i < 150; ++i) {
     const TrackResult a = whole.track(roomFrame(i));
@@ -516,16 +530,25 @@ TEST(Tracker, AKeyframeNotFinishedComesWithTheNextFrame) {
     ASSERT_EQ(a.status, b.status) << "frame " << i;
     if (due) {
       ASSERT_TRUE(b.new_keyframe) << "frame " << i;
-      EXPECT_EQ(b.new_keyframe->id, *due);
+      EXPECT_EQ(b.new_keyframe->id, due->id);
+      EXPECT_EQ(b.new_keyframe->utime, due->utime);  // made from its own frame...
+      EXPECT_TRUE(samePose(b.new_keyframe->T_w_c, due->T_w_c));
+      EXPECT_EQ(b.new_keyframe->new_points.size(), due->new_points.size());  // ...image and depth
+    } else if (i > 0) {
+      EXPECT_FALSE(b.new_keyframe) << "frame " << i;  // none made twice
     }
     due.reset();
     if (a.new_keyframe) {
       ++keyframes;
-      if (i > 0) due = a.new_keyframe->id;
+      if (i > 0) due = a.new_keyframe;
     }
   }
   EXPECT_GT(keyframes, 5);
-  ASSERT_TRUE(split.finishFrame() || !due);  // the last frame's, if it made one
+  const std::optional<KeyframeData> last = split.finishFrame();  // the last frame's, if it made one
+  ASSERT_EQ(last.has_value(), due.has_value());
+  if (last) {
+    EXPECT_EQ(last->id, due->id);
+  }
 }
 
 TEST(Tracker, TracksTumTeddyWithoutMapper) {

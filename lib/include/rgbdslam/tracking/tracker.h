@@ -198,7 +198,7 @@ struct TrackResult {
   Status status = Status::kBadFrame;
   PoseEstimate pose;
   std::optional<KeyframeData> new_keyframe;  // made in this call: for the mapper, with provisional points
-  // trackPose() only: this frame makes a keyframe, which finishFrame() makes.
+  // This frame makes a keyframe: after trackPose(), finishFrame() makes it (track() has).
   bool keyframe_due = false;
   std::string error;                         // for kBadFrame
   std::string lost_reason;                   // for kLost: why ("4 points found", "depth ...")
