@@ -93,9 +93,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   return sync_.outbox().empty() && encoding_.empty() ? 0 : 1;
 }
 
-// Handles everything that has arrived (frames into the backlog, map versions checked and
+// Handles everything that has arrived (frames into the backlog, map versions decoded and
 // queued), then tracks the oldest frame of the backlog; map versions are applied when no
-// frame waits (issue 10, item 6: a frame does not wait for a map update).
+// frame waits, or once they have waited kMaxMapWaitMs (issue 10, item 6: a frame does not
+// wait for a map update).
 void TrackerNode::handleAvailable(int timeout_ms) {
   const int count = local_ == link_ ? 1 : 2;
   for (int round = 0; round < kMaxHandlePerLoop; ++round) {
