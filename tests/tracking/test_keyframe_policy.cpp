@@ -126,5 +126,33 @@ TEST_F(KeyframePolicyTest, FewPointsFoundWithoutDepthHaveTheirOwnThresholdAndWai
   EXPECT_FALSE(decide(translated(0.0)));
 }
 
+// Points that thin out to a far plane (a hall's walls beyond the depth range): plenty are
+// found, but the pose's sigma grows; a keyframe brings near points from depth before the
+// pose is lost, but not for one uncertain frame, not in mono, and not without corners.
+TEST_F(KeyframePolicyTest, AnUncertainPoseForSomeFramesGivesAKeyframeWhereverTheCameraIs) {
+  options_.uncertain_pose_sigma_m = 0.015;
+  options_.uncertain_pose_frames = 3;
+  options_.few_points = 60;  // also the corners a keyframe needs to be worth making
+  input_.frames_since_keyframe = 3;  // fewer than min_frames_between_keyframes
+  input_.points_found = 150;
+  input_.points_from_depth = true;
+  input_.uncertain_frames = 3;
+  EXPECT_TRUE(decide(translated(0.0)));  // on top of keyframe 0
+  input_.uncertain_frames = 2;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.uncertain_frames = 3;
+  input_.points_from_depth = false;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.points_from_depth = true;
+  input_.corners = 10;  // a plain view: a keyframe brings nothing
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.corners = -1;
+  input_.tracking_good = false;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.tracking_good = true;
+  options_.uncertain_pose_sigma_m = 0.0;  // off
+  EXPECT_FALSE(decide(translated(0.0)));
+}
+
 }  // namespace
 }  // namespace rgbdslam

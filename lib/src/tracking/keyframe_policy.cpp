@@ -23,6 +23,11 @@ void KeyframePolicyOptions::bind(OptionRegistry* r, const std::string& s) {
           "whatever the distance (0: off)");
   r->bind(s, "keyframe_few_points_min_frames", &few_points_min_frames, 0, 100000, "frames",
           "...after at least this many frames since the last keyframe");
+  r->bind(s, "keyframe_pose_sigma_m", &uncertain_pose_sigma_m, 0.0, 100.0, "m",
+          "the pose's translation sigma above this for keyframe_pose_sigma_frames frames in a "
+          "row, and the mode makes points from depth: a keyframe is due (0: off)");
+  r->bind(s, "keyframe_pose_sigma_frames", &uncertain_pose_frames, 1, 100000, "frames",
+          "...this many frames");
   r->bind(s, "keyframe_few_points_mono", &few_points_no_depth, 0, 100000, "points",
           "mono (no points from depth): fewer points found gives a keyframe whatever the "
           "distance (0: off)");
@@ -39,6 +44,10 @@ bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
   const bool corners_to_gain = input.corners < 0 || input.corners >= few_points;
   if (input.points_found < few_points && input.frames_since_keyframe >= few_points_min_frames &&
       corners_to_gain) {
+    return true;
+  }
+  if (input.points_from_depth && options.uncertain_pose_sigma_m > 0.0 &&
+      input.uncertain_frames >= options.uncertain_pose_frames && corners_to_gain) {
     return true;
   }
   if (input.frames_since_keyframe < options.min_frames_between_keyframes) return false;

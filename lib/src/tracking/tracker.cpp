@@ -232,6 +232,7 @@ class Tracker::Impl {
     lost_velocity_.setZero();
     lost_frames_ = 0;
     frames_since_keyframe_ = 0;
+    uncertain_frames_ = 0;
     next_keyframe_id_ = 0;
     last_quality_ = 0.0;
     have_previous_sbi_ = false;
@@ -388,6 +389,8 @@ class Tracker::Impl {
   Vec6 lost_velocity_ = Vec6::Zero();
   int lost_frames_ = 0;
   int frames_since_keyframe_ = 0;
+  int uncertain_frames_ = 0;  // tracked frames in a row, since the last keyframe, with the
+                              // pose sigma over keyframes.uncertain_pose_sigma_m
   KeyframeId next_keyframe_id_ = 0;
   bool keyframes_allowed_ = true;  // false: localise in a loaded map, add nothing to it
   double last_quality_ = 0.0;  // of the last accepted frame (0 after loss and reset)
@@ -592,6 +595,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   }
   next_keyframe_id_ = 1;
   frames_since_keyframe_ = 0;
+  uncertain_frames_ = 0;
   T_c_w_ = SE3();
   velocity_.setZero();
   state_ = TrackingState::kTracking;
@@ -1120,6 +1124,7 @@ std::string Tracker::Impl::lossReason(const Attempt& attempt) const {
 TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason, bool inconsistent) {
   state_ = TrackingState::kLost;
   lost_velocity_ = velocity_;
+  uncertain_frames_ = 0;
   lost_frames_ = 1;  // this frame: the first relocalisation is two frames past the last pose
   velocity_.setZero();
   last_quality_ = 0.0;
@@ -1219,6 +1224,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   result.pose_sigma_m = attempt.uncertainty.translation_m;
   result.pose_sigma_deg = attempt.uncertainty.rotation_rad * 180.0 / M_PI;
   ++frames_since_keyframe_;
+  const double uncertain_sigma_m = options_.keyframes.uncertain_pose_sigma_m;
+  uncertain_frames_ = uncertain_sigma_m > 0.0 && result.pose_sigma_m > uncertain_sigma_m ? uncertain_frames_ + 1 : 0;
   // A frame held by depth makes a keyframe only where it offers corners for new points: one
   // without would carry only its depth-held pose into the map, and the next frames, aligned
   // to it, would inherit that error (measured on the office: a 5 cm step when such a
@@ -1231,7 +1238,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
         depthPointsAllowed(mode_, next_keyframe_id_)));
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
-                                  depthPointsAllowed(mode_, next_keyframe_id_), cornerCount()};
+                                  depthPointsAllowed(mode_, next_keyframe_id_), cornerCount(),
+                                  uncertain_frames_};
   if (keyframes_allowed_ && shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     pending_keyframe_ = PendingKeyframe{frame.utime, result.pose.T_w_c, foundMeasurements(frame),
                                         frame.depth.empty() ? cv::Mat() : frame.depth.clone(), frame.depth_scale};
@@ -1411,6 +1419,7 @@ KeyframeData Tracker::Impl::addKeyframe(PendingKeyframe pending) {
     data.new_points.push_back(np.point.data());
   }
   frames_since_keyframe_ = 0;
+  uncertain_frames_ = 0;
   return data;
 }
 
