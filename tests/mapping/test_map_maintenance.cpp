@@ -122,6 +122,39 @@ TEST(KeyframeCulling, KeepsKeyframeZeroAndKeyframesWithTheirOwnPointsOrTooFewPoi
   for (KeyframeId id : {0, 1, 4, 5}) EXPECT_TRUE(map.hasKeyframe(id)) << id;
 }
 
+// Keyframes 0-4 along a turn: points 1-40 in keyframes 0, 1 and 2, points 41-80 in 2, 3 and 4.
+// Keyframe 2 is redundant (each of its points in two others) but the only link between the
+// two groups: keyframes 1 and 3 share nothing.
+Map chainMap() {
+  Map map;
+  for (KeyframeId id = 0; id < 5; ++id) {
+    auto keyframe = std::make_unique<Keyframe>();
+    keyframe->id = id;
+    keyframe->T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1 * static_cast<double>(id), 0, 0));
+    map.addKeyframe(std::move(keyframe));
+  }
+  for (PointId pid = 1; pid <= 80; ++pid) {
+    const KeyframeId first = pid <= 40 ? 0 : 2;
+    map.addPoint(MapPoint(MapPointData{pid, Vec3(0, 0, 2), first + 1, {100, 100}, 0}));
+    for (KeyframeId kf = first; kf < first + 3; ++kf) map.addMeasurement(kf, Measurement{pid, {100, 100}, 0, 2.0});
+  }
+  return map;
+}
+
+TEST(KeyframeCulling, KeepsAKeyframeThatHoldsTheChainTogether) {
+  std::set<std::pair<PointId, KeyframeId>> pending;
+  CullOptions options;
+  options.keyframe_cull_min_points = 0;
+  options.keyframe_redundant_observers = 2;
+  Map map = chainMap();
+  EXPECT_TRUE(cullRedundantKeyframes(&map, {2}, options, &pending).removed_keyframes.empty());
+  // Keyframe 1 links nothing that keyframes 0 and 2 do not share (points 1-40).
+  EXPECT_EQ(cullRedundantKeyframes(&map, {1}, options, &pending).removed_keyframes, (std::vector<KeyframeId>{1}));
+  map = chainMap();
+  options.keyframe_cull_min_shared = 0;  // off: redundancy alone
+  EXPECT_EQ(cullRedundantKeyframes(&map, {2}, options, &pending).removed_keyframes, (std::vector<KeyframeId>{2}));
+}
+
 TEST(KeyframeCulling, RemovingAKeyframeTakesItsMeasurementsOnly) {
   Map map = redundantMap();
   map.removeKeyframe(3);

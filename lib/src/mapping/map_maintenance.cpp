@@ -1,6 +1,7 @@
 #include "rgbdslam/mapping/map_maintenance.h"
 
 #include <algorithm>
+#include <iterator>
 #include <map>
 
 namespace rgbdslam {
@@ -47,6 +48,33 @@ bool redundant(const Map& map, const Keyframe& kf, const CullOptions& options) {
   return static_cast<double>(seen_elsewhere) >= options.keyframe_redundancy * static_cast<double>(total);
 }
 
+// Points measured in both keyframes.
+int sharedPoints(const Keyframe& a, const Keyframe& b) {
+  const Keyframe& fewer = a.measurements().size() <= b.measurements().size() ? a : b;
+  const Keyframe& more = &fewer == &a ? b : a;
+  int shared = 0;
+  for (const auto& [pid, m] : fewer.measurements()) shared += more.measurements().count(pid) > 0 ? 1 : 0;
+  return shared;
+}
+
+// True when 'kf' holds the keyframe chain together: the keyframes before and after it (in id
+// order, i.e. along the path) share fewer points without it than the link through it,
+// min(keyframe_cull_min_shared, its points shared with either). Each culled keyframe is
+// redundant on its own, but culled one after another the keyframes of a turn can take every
+// point that the keyframes on either side of it shared, and bundle adjustment then holds
+// what follows by a couple of points.
+bool bridgesChain(const Map& map, const Keyframe& kf, const CullOptions& options) {
+  if (options.keyframe_cull_min_shared <= 0) return false;
+  const auto it = map.keyframes().find(kf.id);
+  if (it == map.keyframes().end() || it == map.keyframes().begin()) return false;
+  const auto next = std::next(it);
+  if (next == map.keyframes().end()) return false;
+  const Keyframe& before = *std::prev(it)->second;
+  const Keyframe& after = *next->second;
+  const int through = std::min({options.keyframe_cull_min_shared, sharedPoints(before, kf), sharedPoints(kf, after)});
+  return sharedPoints(before, after) < through;
+}
+
 // The keyframe that describes the point once 'removed' is gone: the finest measurement,
 // then the camera nearest the removed one; never keyframe 0 (see the header). -1: none.
 KeyframeId newSource(const Map& map, PointId pid, const Keyframe& removed) {
@@ -86,6 +114,9 @@ void CullOptions::bind(OptionRegistry* r, const std::string& s) {
           "the same in mode depth-ba, where bundle adjustment holds each measurement's depth too");
   r->bind(s, "keyframe_cull_min_age", &keyframe_cull_min_age, 1, 1000, "keyframes",
           "the newest this many keyframes are never culled");
+  r->bind(s, "keyframe_cull_min_shared", &keyframe_cull_min_shared, 0, 100000, "points",
+          "a redundant keyframe stays when the keyframes before and after it would share fewer points without it "
+          "than this many, or than the link through it if weaker (0: off)");
   r->bind(s, "keyframe_cull_min_points", &keyframe_cull_min_points, 0, 100000, "points",
           "keyframes measuring fewer points are never culled: where points are this scarce the tracker leans on "
           "the keyframes' depth surfaces (as tracker.keyframe_few_points)");
@@ -203,7 +234,9 @@ KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId
   if (options.keyframe_redundant_observers < 1) return result;  // culling off for this mode
   for (KeyframeId id : candidates) {
     const Keyframe* kf = map->keyframe(id);
-    if (id != 0 && kf && redundant(*map, *kf, options)) removeKeyframe(map, id, pending_2d_outliers, &result);
+    if (id != 0 && kf && redundant(*map, *kf, options) && !bridgesChain(*map, *kf, options)) {
+      removeKeyframe(map, id, pending_2d_outliers, &result);
+    }
   }
   return result;
 }
