@@ -42,8 +42,8 @@ struct KeyframePolicyOptions {
   // three times better than a lost one; above the 99th percentile of tracked frames in the
   // corridor (1.2 cm) and the room (0.4 cm). Off by default: it carries the flight's first
   // 1400 frames past the hall (batch: 948 -> 1230 posed), but through the suite the full
-  // corridor measured 148 and 155 mm with it against 28 mm without (one run each): not
-  // shown to be no worse (docs/open_work.md).
+  // corridor measured 155, 148, 61 and 26 mm with it against 28, 47 and 40 mm without
+  // (real-time runs): not shown to be no worse (docs/open_work.md).
   double uncertain_pose_sigma_m = 0.0;  // [m]
   int uncertain_pose_frames = 3;          // [frames]
   // The same in mono, where a keyframe gets its points only from the mapper's epipolar
