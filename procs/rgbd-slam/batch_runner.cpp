@@ -9,6 +9,7 @@
 #include <limits>
 #include <iostream>
 
+#include "common/frame_log.h"
 #include "common/map_start.h"
 #include "common/process.h"
 #include "common/source_factory.h"
@@ -112,11 +113,11 @@ Expected<std::unique_ptr<BatchRunner>> BatchRunner::create(BatchOptions options)
   } else {
     groundtruth = groundTruthFor(options.source);
   }
-  std::ofstream frame_log;
+  FrameLog frame_log;
   if (!options.frame_log.empty()) {
-    frame_log.open(options.frame_log);
-    if (!frame_log) return Error{"cannot write --frame-log " + options.frame_log};
-    frame_log << "seq,t_s,status,state,points,quality,sigma_m,sigma_deg,correction_m,depth_aided,inconsistent,keyframe,track_ms,reason\n";
+    auto opened = FrameLog::open(options.frame_log);
+    if (!opened) return Error{opened.error()};
+    frame_log = std::move(*opened);
   }
   double load_ms = 0.0;
   auto start_map = startMapIfAsked(options, camera, &load_ms);
@@ -159,21 +160,6 @@ void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
   std::cerr << (tty ? "\r" : "") << line << (tty && !final_line ? "" : "\n") << std::flush;
 }
 
-void BatchRunner::logFrame(const TrackResult& result) {
-  if (!frame_log_.is_open()) return;
-  static const char* const kStatus[] = {"initialised", "tracked", "lost", "relocalised", "bad_frame", "not_initialised"};
-  const std::string& reason = result.status == TrackResult::Status::kBadFrame ? result.error : result.lost_reason;
-  std::string quoted;  // CSV: in double quotes, a quote doubled
-  for (char c : reason) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  char line[160];
-  std::snprintf(line, sizeof(line), "%ld,%.6f,%s,%s,%d,%.3f,%.5f,%.4f,%.4f,%d,%d,%d,%.3f,", static_cast<long>(result.pose.seq),
-                result.pose.utime * 1e-6, kStatus[static_cast<int>(result.status)], toString(result.pose.state),
-                result.pose.points_tracked, result.pose.quality, result.pose_sigma_m, result.pose_sigma_deg,
-                result.correction_m, result.depth_aided ? 1 : 0, result.inconsistent ? 1 : 0, result.new_keyframe ? 1 : 0,
-                result.track_ms);
-  frame_log_ << line << '"' << quoted << "\"\n";
-}
-
 int BatchRunner::run(const std::atomic<bool>& stop) {
   if (const Status& store = slam_->tracker().keyframeStoreStatus(); !store) {
     std::cerr << "rgbd-slam: " << store.error() << "\n";
@@ -200,7 +186,7 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     ++frames;
     last = slam_->process(input.frame);
     track_ms_.push_back(last.track_ms);
-    logFrame(last);
+    frame_log_.write(last, last.new_keyframe.has_value());
     if (last.status == TrackResult::Status::kBadFrame) {
       std::cerr << "\nrgbd-slam: error: frame " << input.frame.seq << ": " << last.error << "\n";
       ++bad_frames_;

@@ -1,7 +1,6 @@
 #pragma once
 // The rgbd-slam loop: read frames, run the SLAM system, write the trajectory, show
 // progress, and at the end evaluate against ground truth when there is one.
-#include <fstream>
 #include <atomic>
 #include <map>
 #include <memory>
@@ -9,6 +8,7 @@
 #include <string>
 
 #include "common/cli.h"
+#include "common/frame_log.h"
 #include "common/loss_report.h"
 #include "common/slam_config.h"
 #include "rgbdslam/camera/pinhole_camera.h"
@@ -48,7 +48,6 @@ class BatchRunner {
   bool saveMapIfAsked();
   void printMapFileSummary() const;
   void showProgress(const TrackResult& result, bool final_line);
-  void logFrame(const TrackResult& result);
   void printSummary(const Trajectory& trajectory) const;
 
   BatchOptions options_;
@@ -57,7 +56,7 @@ class BatchRunner {
   std::optional<Trajectory> groundtruth_;
   std::unique_ptr<SlamSystem> slam_;
   std::vector<double> track_ms_;
-  std::ofstream frame_log_;  // open when --frame-log is given
+  FrameLog frame_log_;  // open when --frame-log is given
   std::vector<TrackingState> pose_states_;       // the state of each trajectory pose
   std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted

@@ -15,7 +15,7 @@ CommandLine makeCommandLine() {
   cli.option("source", "SRC", "tum:DIR | synth:SCENE[,key=value...] | openni2:URI | lcmlog:FILE[@CHANNEL]");
   cli.option("camera", "FILE", "camera calibration YAML (required except for synth:)");
   cli.option("output", "TRAJ.txt", "trajectory in TUM format (every frame that got a pose, as published: map corrections taken in at tracker.correction_rate_*)");
-  cli.option("frame-log", "FILE.csv", "one line per frame read: seq, time, status, tracking state, points found, quality, pose sigma [m] and [deg], map correction not yet published [m], depth-aided, inconsistent, made a keyframe, track_ms, loss reason");
+  cli.option("frame-log", "FILE.csv", "one line per frame read: status, tracking state, points found, quality, pose sigma, map correction, made a keyframe, track_ms, loss reason, ... (the columns: common/frame_log.h)");
   cli.flag("deterministic", "process every frame; the mapper finishes each keyframe before the next frame");
   cli.option("link-loss", "P", "deterministic: tracker and mapper talk over a simulated link losing this fraction of messages each way [0-1]", "0");
   cli.option("link-delay-ms", "MS", "deterministic: ...delaying every message this long, in the frames' time [ms]", "0");

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "common/cli.h"
+#include "common/frame_log.h"
 #include "common/map_start.h"
 #include "common/process.h"
 #include "common/slam_config.h"
@@ -28,6 +29,8 @@ CommandLine makeCommandLine() {
              "the first frames relocalise in it");
   cli.option("link-budget-kbps", "N", "the link's average rate at most, what the tracker sends and the maps it receives [kbit/s] (0: none); "
              "overrides tracker_node.link_budget_kbps", "the configuration's");
+  cli.option("frame-log", "FILE.csv", "one line per frame tracked: state, points, pose sigma, track_ms, latency_ms, ... "
+             "(the columns: common/frame_log.h)");
   cli.flag("localise-only", "with --load-map: track in the loaded map, add no keyframes");
   addLcmUrlOption(cli);
   return cli;
@@ -82,6 +85,12 @@ int main(int argc, char** argv) {
   if (Status s = startMapIfAsked(cli, *camera, *parseSlamMode(config->slam->mode), &start_map); !s) {
     return usageError("rgbd-tracker", s.error());
   }
+  FrameLog frame_log;
+  if (cli.has("frame-log")) {
+    auto opened = FrameLog::open(cli.get("frame-log"));
+    if (!opened) return usageError("rgbd-tracker", opened.error());
+    frame_log = std::move(*opened);
+  }
   auto local = openLcm(cli.get("lcm-url"));
   if (!local) return usageError("rgbd-tracker", local.error());
   std::unique_ptr<lcm::LCM> own_link;
@@ -101,6 +110,7 @@ int main(int argc, char** argv) {
   if (!node.keyframeStoreStatus()) return usageError("rgbd-tracker", node.keyframeStoreStatus().error());
   warnIfStoreInMemory("rgbd-tracker", node.keyframeStore());
   if (start_map) node.startFrom(*start_map, cli.has("localise-only"));
+  node.logFramesTo(std::move(frame_log));
   const int status = node.run(installStopHandlers());
   node.printSummary();
   return status;

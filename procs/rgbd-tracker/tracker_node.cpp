@@ -144,10 +144,14 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   ++counters_.frames;
   TrackResult result = tracker_.trackPose(*frame);
-  if (result.new_keyframe) sendKeyframe(std::move(*result.new_keyframe));  // frame 0's, or one left unfinished
+  result.pose.utime = frame->utime;
+  result.pose.seq = frame->seq;
+  const bool keyframe_in_pose = result.new_keyframe.has_value();
+  if (keyframe_in_pose) sendKeyframe(std::move(*result.new_keyframe));  // frame 0's, or one left unfinished
   if (result.status == TrackResult::Status::kBadFrame) {
     ++counters_.bad_frames;
     std::cerr << "rgbd-tracker: frame " << frame->seq << " skipped: " << result.error << "\n";
+    frame_log_.write(result, false);
     return;
   }
   track_ms_.add(result.track_ms);
@@ -157,8 +161,6 @@ void TrackerNode::trackFrame(const Received& received) {
   counters_.inconsistent += result.inconsistent;
   counters_.depth_aided += result.depth_aided;
   state_ = result.pose.state;
-  result.pose.utime = frame->utime;
-  result.pose.seq = frame->seq;
   if (const std::string event = loss_.update(result); !event.empty()) {
     std::cerr << "rgbd-tracker: " << event << "\n";
   }
@@ -172,7 +174,9 @@ void TrackerNode::trackFrame(const Received& received) {
   // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
   const auto start = Clock::now();
   std::optional<KeyframeData> keyframe = tracker_.finishFrame();
-  after_pose_ms_.add(msBetween(start, Clock::now()));
+  const double after_pose_ms = msBetween(start, Clock::now());
+  after_pose_ms_.add(after_pose_ms);
+  frame_log_.write(result, keyframe_in_pose || keyframe.has_value(), FrameLog::Times{after_pose_ms, result.pose.latency_ms});
   if (keyframe) sendKeyframe(std::move(*keyframe));
 }
 

@@ -30,6 +30,7 @@
 #include <memory>
 #include <string>
 
+#include "common/frame_log.h"
 #include "common/lcm_conversions.h"
 #include "common/link_budget.h"
 #include "rgbdslam/util/background_worker.h"
@@ -59,6 +60,8 @@ class TrackerNode {
   // does with the same file and map id: keyframe ids continue after the file's. With
   // 'localise_only' the tracker adds no keyframes (tracker.h, load).
   void startFrom(const LoadedMap& map, bool localise_only);
+  // Before run(): write one line per frame tracked to 'log' (rgbd-tracker --frame-log).
+  void logFramesTo(FrameLog log) { frame_log_ = std::move(log); }
   // Ok, or why the keyframe store the options asked for could not be made.
   const Status& keyframeStoreStatus() const { return tracker_.keyframeStoreStatus(); }
   const KeyframeStore* keyframeStore() const { return tracker_.keyframeStore(); }
@@ -141,6 +144,7 @@ class TrackerNode {
   };
   Counters counters_;
   LossReport loss_;  // logs losing tracking and relocalising, one line each
+  FrameLog frame_log_;  // --frame-log: one line per frame tracked (closed: none)
   std::array<long, 5> state_frames_{};  // frames per TrackingState (by its value)
 };
 
