@@ -51,6 +51,12 @@ void printPeakRss() {
   }
 }
 
+void printKeyframesKept(const KeyframesKept& kept) {
+  std::printf("keyframes_kept_gauge %ld\nkeyframes_kept_young %ld\nkeyframes_kept_few_points %ld\n"
+              "keyframes_kept_not_redundant %ld\nkeyframes_kept_bridge %ld\nkeyframes_kept_redundant %ld\n",
+              kept.gauge, kept.young, kept.few_points, kept.not_redundant, kept.bridge, kept.redundant);
+}
+
 void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store) {
   if (!store || !store->inMemory()) return;
   std::cerr << program << ": warning: the keyframe store is on a RAM file system (tmpfs): cold keyframes "

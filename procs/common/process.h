@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "rgbdslam/mapping/map_maintenance.h"
 #include "rgbdslam/util/expected.h"
 #include "rgbdslam/tracking/keyframe_store.h"
 
@@ -36,6 +37,8 @@ struct MemoryUsage {
 MemoryUsage memoryUsage();
 // Prints "peak_rss_mb X.X" (or "peak_rss_mb unknown") on stdout, the exit summary's form.
 void printPeakRss();
+// keyframes_kept_<reason> lines on stdout: why the mapper's keyframes stay (map_maintenance.h).
+void printKeyframesKept(const KeyframesKept& kept);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.

@@ -244,6 +244,7 @@ void MapperNode::printSummary() const {
   std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
               loops.recognised, loops.closed, loops.refused);
   std::printf("keyframes_in_map %zu\nkeyframes_culled %ld\n", mapper_.map().numKeyframes(), mapper_.keyframesCulled());
+  printKeyframesKept(mapper_.keyframesKept());
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries
   std::fflush(stdout);
 }

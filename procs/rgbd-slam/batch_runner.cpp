@@ -261,6 +261,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
               loops.recognised, loops.closed, loops.refused);
   std::printf("keyframes_culled %ld\nkeyframes_in_map %zu\n", slam_->mapper().keyframesCulled(),
               slam_->mapper().map().numKeyframes());
+  printKeyframesKept(slam_->mapper().keyframesKept());
   if (loss_.lost()) std::printf("lost_at_end_since_frame %ld\n", loss_.lostSinceSeq());
   printMapFileSummary();
   printPeakRss();

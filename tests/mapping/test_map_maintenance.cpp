@@ -155,6 +155,27 @@ TEST(KeyframeCulling, KeepsAKeyframeThatHoldsTheChainTogether) {
   EXPECT_EQ(cullRedundantKeyframes(&map, {2}, options, &pending).removed_keyframes, (std::vector<KeyframeId>{2}));
 }
 
+TEST(KeyframeCulling, SaysWhyEachKeyframeStays) {
+  CullOptions options;
+  options.keyframe_cull_min_age = 1;  // keyframe 4
+  options.keyframe_cull_min_points = 0;
+  options.keyframe_redundant_observers = 2;
+  const Map map = chainMap();
+  // Keyframes 1 and 3 are redundant and culling could take either; 2 holds the chain.
+  KeyframesKept kept = keyframesKept(map, options);
+  EXPECT_EQ(kept.gauge, 1);
+  EXPECT_EQ(kept.young, 1);
+  EXPECT_EQ(kept.redundant, 2);
+  EXPECT_EQ(kept.bridge, 1);
+  EXPECT_EQ(kept.few_points + kept.not_redundant, 0);
+  options.keyframe_cull_min_points = 41;  // keyframes 1 and 3 measure 40 points, 2 measures 80
+  options.keyframe_redundant_observers = 3;
+  kept = keyframesKept(map, options);
+  EXPECT_EQ(kept.few_points, 2);
+  EXPECT_EQ(kept.not_redundant, 1);
+  EXPECT_EQ(kept.redundant + kept.bridge, 0);
+}
+
 TEST(KeyframeCulling, RemovingAKeyframeTakesItsMeasurementsOnly) {
   Map map = redundantMap();
   map.removeKeyframe(3);

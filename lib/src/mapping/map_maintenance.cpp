@@ -241,6 +241,20 @@ KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId
   return result;
 }
 
+KeyframesKept keyframesKept(const Map& map, const CullOptions& options) {
+  KeyframesKept kept;
+  const std::set<KeyframeId> young = newestKeyframes(map, options.keyframe_cull_min_age);
+  for (const auto& [id, kf] : map.keyframes()) {
+    if (id == 0) ++kept.gauge;
+    else if (young.count(id)) ++kept.young;
+    else if (static_cast<int>(kf->measurements().size()) < options.keyframe_cull_min_points) ++kept.few_points;
+    else if (!redundant(map, *kf, options)) ++kept.not_redundant;
+    else if (bridgesChain(map, *kf, options)) ++kept.bridge;
+    else ++kept.redundant;
+  }
+  return kept;
+}
+
 KeyframeCullResult removeKeyframes(Map* map, const std::vector<KeyframeId>& ids,
                                    std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers) {
   KeyframeCullResult result;

@@ -71,6 +71,7 @@ class Mapper::Impl {
   const Map& map() const { return map_; }
   const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
   long keyframesCulled() const { return keyframes_culled_; }
+  KeyframesKept keyframesKept() const { return rgbdslam::keyframesKept(map_, modeCullOptions()); }
   void removeKeyframes(const std::vector<KeyframeId>& ids);
 
  private:
@@ -99,6 +100,7 @@ class Mapper::Impl {
   bool refindNewPoints(const std::atomic<bool>* interrupt);
   void cull();
   void cullKeyframes();
+  CullOptions modeCullOptions() const;  // the culling options of this mode
   void noteRemoval(const KeyframeCullResult& culled);
 
   PinholeCamera camera_;
@@ -380,9 +382,13 @@ void Mapper::Impl::cullKeyframes() {
     }
   }
   const std::vector<KeyframeId> candidates(covisible.begin(), covisible.end());
+  noteRemoval(cullRedundantKeyframes(&map_, candidates, modeCullOptions(), &pending_outliers_));
+}
+
+CullOptions Mapper::Impl::modeCullOptions() const {
   CullOptions cull = options_.cull;
   if (mode_ == SlamMode::kDepthBa) cull.keyframe_redundant_observers = cull.keyframe_redundant_observers_depth;
-  noteRemoval(cullRedundantKeyframes(&map_, candidates, cull, &pending_outliers_));
+  return cull;
 }
 
 void Mapper::Impl::removeKeyframes(const std::vector<KeyframeId>& ids) {
@@ -435,6 +441,7 @@ MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
 const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
 long Mapper::keyframesCulled() const { return impl_->keyframesCulled(); }
+KeyframesKept Mapper::keyframesKept() const { return impl_->keyframesKept(); }
 void Mapper::removeKeyframes(const std::vector<KeyframeId>& ids) { impl_->removeKeyframes(ids); }
 
 }  // namespace rgbdslam

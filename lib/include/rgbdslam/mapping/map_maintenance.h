@@ -108,6 +108,15 @@ KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId
                                           const CullOptions& options,
                                           std::set<std::pair<PointId, KeyframeId>>* pending_2d_outliers);
 
+// Why the keyframes of a map stay, by the culling rule (counts; each keyframe in the first
+// that applies): keyframe 0; the newest keyframe_cull_min_age; fewer than
+// keyframe_cull_min_points measurements; not redundant; holding the chain together; or
+// redundant now (culling has not tested it since it became so). For run summaries.
+struct KeyframesKept {
+  long gauge = 0, young = 0, few_points = 0, not_redundant = 0, bridge = 0, redundant = 0;
+};
+KeyframesKept keyframesKept(const Map& map, const CullOptions& options);
+
 // Removes the listed keyframes as culling does, without judging them (a restarted mapper
 // repeats the culls of its journal); keyframe 0 and unknown ids are left alone.
 KeyframeCullResult removeKeyframes(Map* map, const std::vector<KeyframeId>& ids,

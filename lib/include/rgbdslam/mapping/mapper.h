@@ -127,6 +127,7 @@ class Mapper {
   const Map& map() const;
   const LoopClosureCounters& loopClosures() const;
   long keyframesCulled() const;  // redundant keyframes removed so far
+  KeyframesKept keyframesKept() const;  // why the map's keyframes stay (map_maintenance.h)
   // Removes the keyframes as culling would, unjudged (a restart repeating its journal's culls).
   void removeKeyframes(const std::vector<KeyframeId>& ids);
 
