@@ -109,5 +109,27 @@ TEST(DepthIntegrity, AMissingReadingWhereTheSurfaceGivesOneSeesThrough) {
             0);
 }
 
+// The tracker's record of a point: a missing reading counts only where the surface gave
+// readings before, at that distance or farther.
+TEST(DepthRecord, ExpectsAReadingOnlyWhereTheSurfaceGaveOneAsFarAway) {
+  DepthRecord record;
+  record.add(DepthVerdict::kAgrees, 2.0);
+  record.add(DepthVerdict::kUnchecked, 9.0);  // not checked: nothing learned
+  record.add(DepthVerdict::kOccluded, 3.0);
+  EXPECT_FALSE(record.expectsReadingAt(2.5));  // two checks: too few to count
+  record.add(DepthVerdict::kAgrees, 2.5);
+  EXPECT_TRUE(record.expectsReadingAt(2.9));
+  EXPECT_TRUE(record.expectsReadingAt(3.0));
+  EXPECT_FALSE(record.expectsReadingAt(3.1));  // never read this far: a dark surface may give none
+  record.add(DepthVerdict::kMissing, 3.5);
+  EXPECT_FALSE(record.expectsReadingAt(3.5));  // a missing reading does not extend the range
+  record.add(DepthVerdict::kMissing, 2.0);
+  record.add(DepthVerdict::kMissing, 2.0);
+  EXPECT_FALSE(record.expectsReadingAt(2.0));  // as many checks without a reading as with one
+  EXPECT_FALSE(record.mostlySeenThrough());
+  for (int i = 0; i < 4; ++i) record.add(DepthVerdict::kSeenThrough, 2.0);
+  EXPECT_TRUE(record.mostlySeenThrough());     // 4 of 7 checks with a reading: glass
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -5,6 +5,17 @@
 
 namespace rgbdslam {
 
+void DepthRecord::add(DepthVerdict verdict, double depth_m) {
+  if (verdict == DepthVerdict::kUnchecked) return;
+  if (verdict == DepthVerdict::kMissing) {
+    ++missing;
+    return;
+  }
+  ++checks;
+  seen_through += verdict == DepthVerdict::kSeenThrough;
+  read_max_m = std::max(read_max_m, static_cast<float>(depth_m));
+}
+
 void DepthIntegrityOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "integrity_check", &enabled,
           "hold every tracked pose against the depth image (depth modes): a pose that sees through too many map points is lost, makes no keyframe, and is retried from the prediction and the last pose first");

@@ -403,8 +403,6 @@ class Tracker::Impl {
   // most, while the quality stays above this fraction of the previous pass's.
   static constexpr int kRelocaliseRefinePasses = 2;
   static constexpr double kRelocaliseRefineKeep = 0.9;
-  // A point's depth record counts after this many checks at accepted poses.
-  static constexpr int kDepthRecordMin = 3;
   std::unordered_map<KeyframeId, std::shared_future<KeyframeExtras>> extras_;  // hot, or not yet stored
   // Extras read back from the store, the newest last (a relocalisation's candidates, the
   // depth alignment's nearest keyframes): at most kExtrasCached.
@@ -748,22 +746,20 @@ DepthIntegrity Tracker::Impl::depthIntegrityOf(const Attempt& attempt, const Rgb
   integrity_slots_.clear();
   reading_expected_.clear();
   for (PointSlot* slot : stage_) {
-    slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
-    if (slot->depth_checks >= kDepthRecordMin && 2 * slot->depth_seen_through > slot->depth_checks) continue;
+    slot->depth_verdict = DepthVerdict::kUnchecked;
+    if (slot->depth_record.mostlySeenThrough()) continue;
     integrity_points_.push_back(slot->point->p_w);
     integrity_slots_.push_back(slot);
     // Found where the pose puts it (so not hidden by something nearer than the sensor's
-    // range, which gives no reading either), and its surface gave a reading at most of its
-    // checks: a missing one now is seen through.
-    reading_expected_.push_back(slot->found && slot->depth_checks >= kDepthRecordMin &&
-                                slot->depth_missing < slot->depth_checks);
+    // range, which gives no reading either), and its record expects a reading there.
+    reading_expected_.push_back(slot->found && slot->depth_record.expectsReadingAt((attempt.T_c_w * slot->point->p_w).z()));
   }
   const DepthIntegrity integrity =
       checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,
                           options_.keyframe_build.min_depth_m, options_.keyframe_build.max_depth_m,
                           options_.integrity, &integrity_verdicts_, &reading_expected_);
   for (size_t i = 0; i < integrity_slots_.size(); ++i) {
-    integrity_slots_[i]->depth_verdict = static_cast<int8_t>(integrity_verdicts_[i]);
+    integrity_slots_[i]->depth_verdict = integrity_verdicts_[i];
   }
   return integrity;
 }
@@ -1200,14 +1196,9 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
   updateDepthReference(attempt, frame);
   for (PointSlot* slot : stage_) {
-    if (slot->depth_verdict != static_cast<int8_t>(DepthVerdict::kUnchecked)) {
-      // A check without a reading is counted apart, so that the glass rule (seen through at
-      // most of the checks with a reading) keeps its meaning.
-      const bool missing = slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kMissing);
-      slot->depth_checks += !missing;
-      slot->depth_missing += missing;
-      slot->depth_seen_through += slot->depth_verdict == static_cast<int8_t>(DepthVerdict::kSeenThrough);
-      slot->depth_verdict = static_cast<int8_t>(DepthVerdict::kUnchecked);
+    if (slot->depth_verdict != DepthVerdict::kUnchecked) {
+      slot->depth_record.add(slot->depth_verdict, (T_c_w_ * slot->point->p_w).z());
+      slot->depth_verdict = DepthVerdict::kUnchecked;
     }
     if (!slot->searched) continue;
     ++slot->point->times_projected;

@@ -18,6 +18,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/image/patch.h"
 #include "rgbdslam/map/map.h"
+#include "rgbdslam/tracking/depth_integrity.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
@@ -56,11 +57,10 @@ struct PointSlot {
   bool found = false;
   Eigen::Vector2d found_uv = Eigen::Vector2d::Zero();  // level 0
   int found_level = 0;
-  // The depth integrity check (depth_integrity.h) at accepted poses: how often the point was
-  // checked with a reading, seen through (glass, a wrong point), and checked without a
-  // reading (dark, shiny), and the current frame's verdict.
-  int depth_checks = 0, depth_seen_through = 0, depth_missing = 0;
-  int8_t depth_verdict = 0;  // DepthVerdict of the last check
+  // The depth integrity check (depth_integrity.h): the point's record at accepted poses, and
+  // the current frame's verdict.
+  DepthRecord depth_record;
+  DepthVerdict depth_verdict = DepthVerdict::kUnchecked;  // this frame's check
 };
 
 // Fills the slot's point, source and unprojection Jacobian, and drops its patch cache.
