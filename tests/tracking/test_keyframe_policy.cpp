@@ -128,7 +128,8 @@ TEST_F(KeyframePolicyTest, FewPointsFoundWithoutDepthHaveTheirOwnThresholdAndWai
 
 // Points that thin out to a far plane (a hall's walls beyond the depth range): plenty are
 // found, but the pose's sigma grows; a keyframe brings near points from depth before the
-// pose is lost, but not for one uncertain frame, not in mono, and not without corners.
+// pose is lost, but not for one uncertain frame, not in mono, not without corners, and not
+// where points are scarce.
 TEST_F(KeyframePolicyTest, AnUncertainPoseForSomeFramesGivesAKeyframeWhereverTheCameraIs) {
   options_.uncertain_pose_sigma_m = 0.015;
   options_.uncertain_pose_frames = 3;
@@ -150,6 +151,14 @@ TEST_F(KeyframePolicyTest, AnUncertainPoseForSomeFramesGivesAKeyframeWhereverThe
   input_.tracking_good = false;
   EXPECT_FALSE(decide(translated(0.0)));
   input_.tracking_good = true;
+  // Points scarce: the sigma grows because they are few, and the few-points rule decides
+  // alone (it waits few_points_min_frames, 3, since the last keyframe).
+  input_.points_found = 40;
+  input_.frames_since_keyframe = 2;
+  EXPECT_FALSE(decide(translated(0.0)));
+  input_.frames_since_keyframe = 3;
+  EXPECT_TRUE(decide(translated(0.0)));
+  input_.points_found = 150;
   options_.uncertain_pose_sigma_m = 0.0;  // off
   EXPECT_FALSE(decide(translated(0.0)));
 }

@@ -25,7 +25,8 @@ void KeyframePolicyOptions::bind(OptionRegistry* r, const std::string& s) {
           "...after at least this many frames since the last keyframe");
   r->bind(s, "keyframe_pose_sigma_m", &uncertain_pose_sigma_m, 0.0, 100.0, "m",
           "the pose's translation sigma above this for keyframe_pose_sigma_frames frames in a "
-          "row, and the mode makes points from depth: a keyframe is due (0: off)");
+          "row while at least keyframe_few_points are found, and the mode makes points from "
+          "depth: a keyframe is due (0: off)");
   r->bind(s, "keyframe_pose_sigma_frames", &uncertain_pose_frames, 1, 100000, "frames",
           "...this many frames");
   r->bind(s, "keyframe_few_points_mono", &few_points_no_depth, 0, 100000, "points",
@@ -47,7 +48,7 @@ bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
     return true;
   }
   if (input.points_from_depth && options.uncertain_pose_sigma_m > 0.0 &&
-      input.uncertain_frames >= options.uncertain_pose_frames && corners_to_gain) {
+      input.uncertain_frames >= options.uncertain_pose_frames && input.points_found >= few_points && corners_to_gain) {
     return true;
   }
   if (input.frames_since_keyframe < options.min_frames_between_keyframes) return false;
