@@ -23,7 +23,6 @@ class FrameLog {
   FrameLog() = default;  // closed: write() does nothing
   // Creates FILE and writes the header; an error names the file.
   static Expected<FrameLog> open(const std::string& path);
-  bool isOpen() const { return out_.is_open(); }
 
   struct Times {
     std::optional<double> after_pose_ms, latency_ms;

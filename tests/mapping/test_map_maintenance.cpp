@@ -45,17 +45,23 @@ TEST(MapMaintenance, OnlyTheCandidatesAreJudged) {
   EXPECT_EQ(cullDivergedPoints(&map, {2}, 1000.0), (std::vector<PointId>{2}));
 }
 
-// Keyframes 0-5 along x, 0.1 m apart; points 1-100 measured at level 1 in every keyframe but
-// keyframe 5, and described by keyframe 2; point 200 seen in keyframe 2 only (its source),
-// point 201 in keyframes 2 and 0 (source 2).
-Map redundantMap() {
+// Keyframes 0 to count - 1 along x, 0.1 m apart, measuring nothing.
+Map keyframesAlongX(int count) {
   Map map;
-  for (KeyframeId id = 0; id < 6; ++id) {
+  for (KeyframeId id = 0; id < count; ++id) {
     auto keyframe = std::make_unique<Keyframe>();
     keyframe->id = id;
     keyframe->T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1 * static_cast<double>(id), 0, 0));
     map.addKeyframe(std::move(keyframe));
   }
+  return map;
+}
+
+// Keyframes 0-5 along x, 0.1 m apart; points 1-100 measured at level 1 in every keyframe but
+// keyframe 5, and described by keyframe 2; point 200 seen in keyframe 2 only (its source),
+// point 201 in keyframes 2 and 0 (source 2).
+Map redundantMap() {
+  Map map = keyframesAlongX(6);
   for (PointId pid = 1; pid <= 100; ++pid) {
     map.addPoint(MapPoint(MapPointData{pid, Vec3(0, 0, 2), 2, {100, 100}, 1}));
     for (KeyframeId kf = 0; kf < 5; ++kf) {
@@ -126,13 +132,7 @@ TEST(KeyframeCulling, KeepsKeyframeZeroAndKeyframesWithTheirOwnPointsOrTooFewPoi
 // Keyframe 2 is redundant (each of its points in two others) but the only link between the
 // two groups: keyframes 1 and 3 share nothing.
 Map chainMap() {
-  Map map;
-  for (KeyframeId id = 0; id < 5; ++id) {
-    auto keyframe = std::make_unique<Keyframe>();
-    keyframe->id = id;
-    keyframe->T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0.1 * static_cast<double>(id), 0, 0));
-    map.addKeyframe(std::move(keyframe));
-  }
+  Map map = keyframesAlongX(5);
   for (PointId pid = 1; pid <= 80; ++pid) {
     const KeyframeId first = pid <= 40 ? 0 : 2;
     map.addPoint(MapPoint(MapPointData{pid, Vec3(0, 0, 2), first + 1, {100, 100}, 0}));
