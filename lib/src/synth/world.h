@@ -2,6 +2,7 @@
 // Internals of the synthetic renderer (synth/scene.h), shared by its .cpp files:
 //  - textures.cpp: procedural multi-scale textures baked per box face, with mips;
 //  - layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
+//  - floor_plan.h/.cpp: rooms and corridors with doors, and a scripted flight through them;
 //  - flight.cpp:   the flight: rooms joined by corridors and doors, and a scripted flight;
 //  - raycast.cpp:  exact ray casting of one pose into clean colour and depth;
 //  - office.cpp:   the office: two rooms with plain walls and a hand-held walk through them;
