@@ -10,7 +10,7 @@ using namespace rgbdslam;
 
 int main(int argc, char** argv) {
   CommandLine cli("synth-write", "Writes a synthetic sequence as a TUM RGB-D directory.");
-  cli.positional("SCENE", "room, corridor, flight or office, with ,key=value options as in "
+  cli.positional("SCENE", "room, corridor, flight, office or twins, with ,key=value options as in "
                           "synth:SCENE (seed, frames, rate, depth_fraction, depth, effects, ...)");
   cli.positional("DIR", "output directory (created; existing files are overwritten)");
   addLcmUrlOption(cli);  // accepted like every process; nothing is sent

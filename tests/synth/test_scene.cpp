@@ -229,6 +229,7 @@ TEST(SyntheticScene, DefaultLengthsAndTimestamps) {
   EXPECT_EQ(SyntheticScene(parsed("room,frames=7")).numFrames(), 7u);
   EXPECT_EQ(SyntheticScene(parsed("flight")).numFrames(), 18000u);  // ten minutes
   EXPECT_EQ(SyntheticScene(parsed("flight,minutes=2")).numFrames(), 3600u);
+  EXPECT_EQ(SyntheticScene(parsed("twins")).numFrames(), 1800u);
   EXPECT_EQ(SyntheticScene(parsed("room,minutes=0.5,rate=20")).numFrames(), 600u);
 }
 
@@ -365,6 +366,36 @@ TEST(SyntheticScene, FlightSeesGlassPlainWallsAndSurfacesBeyondTheDepthRange) {
   EXPECT_GE(glass, 3) << "frames (of 120) mostly seeing glass";
   EXPECT_GE(far, 3) << "frames (of 120) mostly beyond the depth range";
   EXPECT_GE(plain, 3) << "frames (of 120) mostly seeing plain surfaces";
+}
+
+// The lookalike rooms: every pose of the first room's full turn, moved 14 m east into the
+// second, sees the same image pixel for pixel, except through the doors (a closet behind
+// the first room's west door, the corridor behind the second's). The flight passes both.
+TEST(SyntheticScene, TwinsAreAlikePixelForPixelAwayFromTheirDoors) {
+  const SyntheticScene twins(parsed("twins"));
+  const Vec3 shift(14.0, 0.0, 0.0);
+  int identical = 0, views = 0;
+  double min_equal_share = 1.0;
+  for (size_t i = 350; i <= 470; i += 10) {  // the turn in the first room
+    const SE3 T_a = twins.groundTruthPose(i);
+    ASSERT_LT((T_a.translation() - Vec3(4.0, 3.5, 1.4)).norm(), 0.02) << "frame " << i << " is not on A's spot";
+    const RgbdFrame a = twins.renderPose(T_a, i);
+    const RgbdFrame b = twins.renderPose(SE3(T_a.rotation(), T_a.translation() + shift), i);
+    const cv::Mat equal = (a.depth == b.depth);
+    const double share = cv::countNonZero(equal) / static_cast<double>(equal.total());
+    min_equal_share = std::min(min_equal_share, share);
+    identical += share == 1.0 && cv::norm(a.colour, b.colour, cv::NORM_INF) == 0;
+    ++views;
+  }
+  EXPECT_GE(identical, views / 2) << "of " << views << " views, identical in both rooms";
+  EXPECT_GT(min_equal_share, 0.5) << "share of the depth image alike, at least";
+  bool in_b = false, back_in_a = false;
+  for (size_t i = 0; i < twins.numFrames(); i += 30) {
+    const Vec3 p = twins.groundTruthPose(i).translation();
+    in_b = in_b || (p.x() > 15.0 && p.x() < 21.0);
+    back_in_a = back_in_a || (in_b && p.x() < 7.0);
+  }
+  EXPECT_TRUE(in_b && back_in_a) << "the flight does not go into the second room and back";
 }
 
 // ---- rendering

@@ -22,6 +22,7 @@ constexpr int64_t kEpochUs = 1700000000LL * 1000000LL;  // time of frame 0 [us]
 constexpr double kRoomDefaultSeconds = 20.0;             // 600 frames at 30 Hz
 constexpr double kCorridorDefaultSeconds = 110.0;        // 3300 frames at 30 Hz, 110 m
 constexpr double kFlightDefaultSeconds = 600.0;          // a ten-minute flight
+constexpr double kTwinsDefaultSeconds = 60.0;            // the lookalike rooms' flight, 1800 frames
 constexpr double kMaxMinutes = 120.0;                    // limit of the minutes key
 constexpr double kMaxRangeLimitM = 13.0;                 // uint16 at 5000 per metre: 13.1 m
 constexpr int kMinImageSidePx = 32, kMaxImageSidePx = 4096;  // limits of the size key [px]
@@ -256,6 +257,7 @@ const char* sceneName(SyntheticSceneKind scene) {
     case SyntheticSceneKind::kCorridor: return "corridor";
     case SyntheticSceneKind::kFlight: return "flight";
     case SyntheticSceneKind::kOffice: return "office";
+    case SyntheticSceneKind::kTwins: return "twins";
   }
   return "room";
 }
@@ -319,12 +321,13 @@ Expected<SyntheticOptions> parseSyntheticSpec(const std::string& spec) {
     if (first) {
       bool known = false;
       for (const auto kind : {SyntheticSceneKind::kRoom, SyntheticSceneKind::kCorridor,
-                              SyntheticSceneKind::kFlight, SyntheticSceneKind::kOffice}) {
+                              SyntheticSceneKind::kFlight, SyntheticSceneKind::kOffice,
+                              SyntheticSceneKind::kTwins}) {
         if (item == sceneName(kind)) options.scene = kind, known = true;
       }
       if (!known) {
         return Error{where + "unknown scene '" + item +
-                     "' (expected room, corridor, flight or office)"};
+                     "' (expected room, corridor, flight, office or twins)"};
       }
       options.effects = defaultEffects(options.scene);
       continue;
@@ -474,6 +477,7 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options)
   const double default_s = options.scene == SyntheticSceneKind::kRoom       ? kRoomDefaultSeconds
                            : options.scene == SyntheticSceneKind::kCorridor ? kCorridorDefaultSeconds
                            : options.scene == SyntheticSceneKind::kFlight   ? kFlightDefaultSeconds
+                           : options.scene == SyntheticSceneKind::kTwins    ? kTwinsDefaultSeconds
                                                                             : kOfficeDefaultSeconds;
   const double seconds = options.minutes > 0 ? 60.0 * options.minutes : default_s;
   num_frames_ = options.num_frames > 0
@@ -496,6 +500,10 @@ SyntheticScene::SyntheticScene(const SyntheticOptions& options)
     case SyntheticSceneKind::kOffice:
       world_ = std::make_shared<const synthetic::World>(
           synthetic::buildOffice(options.seed, duration_s));
+      break;
+    case SyntheticSceneKind::kTwins:
+      world_ = std::make_shared<const synthetic::World>(
+          synthetic::buildTwins(options.seed, duration_s));
       break;
   }
   if (camera_.hasDistortion()) {

@@ -213,6 +213,15 @@ void WorldBuilder::add(const Vec3& lo, const Vec3& hi, SyntheticSurface surface,
   world_.boxes.push_back(box);
 }
 
+void WorldBuilder::repeat(size_t first, const Vec3& shift) {
+  const size_t end = world_.boxes.size();
+  for (size_t i = first; i < end; ++i) {
+    Box box = world_.boxes[i];
+    box.lo += shift, box.hi += shift;
+    world_.boxes.push_back(box);
+  }
+}
+
 World WorldBuilder::build(const TrajectoryModel& trajectory) {
   world_.trajectory = trajectory;
   return std::move(world_);

@@ -4,6 +4,7 @@
 //  - layouts.cpp:  the room and corridor (boxes, styles) and their trajectories;
 //  - floor_plan.h/.cpp: rooms and corridors with doors, and a scripted flight through them;
 //  - flight.cpp:   the flight: rooms joined by corridors and doors, and a scripted flight;
+//  - twins.cpp:    the lookalike rooms: two identical rooms, a flight through both;
 //  - raycast.cpp:  exact ray casting of one pose into clean colour and depth;
 //  - office.cpp:   the office: two rooms with plain walls and a hand-held walk through them;
 //  - noise.cpp:    the Kinect error model and image noise on a clean frame;
@@ -161,6 +162,10 @@ class WorldBuilder {
   void add(const Vec3& lo, const Vec3& hi, SyntheticSurface surface, const TextureStyle& style,
            unsigned face_mask = 0x3f);
   std::mt19937_64& rng() { return rng_; }
+  // Adds a copy of boxes [first, end) moved by 'shift', sharing their textures: a
+  // twin of what they make, texel for texel (building it again would not be: a texture's
+  // size, and so the random draws after it, follow the box's extent in floating point).
+  void repeat(size_t first, const Vec3& shift);
   World build(const TrajectoryModel& trajectory);
 
  private:
@@ -175,6 +180,7 @@ World buildRoom(uint64_t seed, double duration_s);
 World buildCorridor(uint64_t seed, double duration_s);
 World buildFlight(uint64_t seed, double duration_s);
 World buildOffice(uint64_t seed, double duration_s);
+World buildTwins(uint64_t seed, double duration_s);
 
 // ---- rendering
 // Exact images of one pose: colour without noise, camera-frame depth z [m] of surfaces that

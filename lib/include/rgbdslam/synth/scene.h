@@ -42,7 +42,7 @@
 
 namespace rgbdslam {
 
-enum class SyntheticSceneKind { kRoom, kCorridor, kFlight, kOffice };
+enum class SyntheticSceneKind { kRoom, kCorridor, kFlight, kOffice, kTwins };
 
 // What a pixel sees (the optional label image of SyntheticScene::renderPose).
 enum class SyntheticSurface : uint8_t {
