@@ -57,6 +57,12 @@ void printKeyframesKept(const KeyframesKept& kept) {
               kept.gauge, kept.young, kept.few_points, kept.not_redundant, kept.bridge, kept.redundant);
 }
 
+void printLoopClosures(const LoopClosureCounters& loops) {
+  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n"
+              "loops_beyond_drift %ld\nloops_ambiguous %ld\n",
+              loops.queries, loops.recognised, loops.closed, loops.refused, loops.beyond_drift, loops.ambiguous);
+}
+
 void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store) {
   if (!store || !store->inMemory()) return;
   std::cerr << program << ": warning: the keyframe store is on a RAM file system (tmpfs): cold keyframes "

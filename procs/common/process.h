@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "rgbdslam/mapping/loop_closer.h"
 #include "rgbdslam/mapping/map_maintenance.h"
 #include "rgbdslam/util/expected.h"
 #include "rgbdslam/tracking/keyframe_store.h"
@@ -39,6 +40,8 @@ MemoryUsage memoryUsage();
 void printPeakRss();
 // keyframes_kept_<reason> lines on stdout: why the mapper's keyframes stay (map_maintenance.h).
 void printKeyframesKept(const KeyframesKept& kept);
+// loop_* and loops_* lines on stdout: the loop closer's counters (loop_closer.h).
+void printLoopClosures(const LoopClosureCounters& loops);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.

@@ -240,9 +240,7 @@ void MapperNode::printSummary() const {
               << " times) and " << c.keyframes_skipped << " keyframes the tracker no longer held (skipped)";
   }
   std::cerr << "\n";
-  const LoopClosureCounters& loops = mapper_.loopClosures();  // the worker has stopped
-  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
-              loops.recognised, loops.closed, loops.refused);
+  printLoopClosures(mapper_.loopClosures());  // the worker has stopped
   std::printf("keyframes_in_map %zu\nkeyframes_culled %ld\n", mapper_.map().numKeyframes(), mapper_.keyframesCulled());
   printKeyframesKept(mapper_.keyframesKept());
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries

@@ -256,9 +256,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
   std::printf("map_correction_max_m %.4f\n", max_correction_m_);
-  const LoopClosureCounters& loops = slam_->mapper().loopClosures();  // the mapper has finished
-  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n", loops.queries,
-              loops.recognised, loops.closed, loops.refused);
+  printLoopClosures(slam_->mapper().loopClosures());  // the mapper has finished
   std::printf("keyframes_culled %ld\nkeyframes_in_map %zu\n", slam_->mapper().keyframesCulled(),
               slam_->mapper().map().numKeyframes());
   printKeyframesKept(slam_->mapper().keyframesKept());

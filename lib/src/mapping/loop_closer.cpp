@@ -85,6 +85,8 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
     result.tried = true;
     result.place = match.status;
     ++counters_.queries;
+    if (match.status == PlaceStatus::kInconsistentWithOdometry) ++counters_.beyond_drift;
+    if (match.status == PlaceStatus::kAmbiguous) ++counters_.ambiguous;
     if (match.recognised()) {
       ++counters_.recognised;
       result.with = match.best.keyframe;

@@ -82,6 +82,10 @@ struct LoopClosureResult {
 
 struct LoopClosureCounters {
   long queries = 0, recognised = 0, closed = 0, refused = 0;
+  // Queries whose place verified but was refused by recognition itself: farther from the
+  // keyframe's pose than the drift since explains (a lookalike place), or two verified
+  // places that disagree (PlaceStatus kInconsistentWithOdometry, kAmbiguous).
+  long beyond_drift = 0, ambiguous = 0;
 };
 
 class LoopCloser {
