@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdslam/image/pyramid.h"
@@ -287,7 +288,8 @@ void BM_RelocalisationRanking(benchmark::State& state) {
     if (shortlisted) {
       std::vector<KeyframeId> by_words;
       const std::vector<KeyframeId> shortlist = relocalisationShortlist(
-          map, index, projectVocabulary().bag(query.features.descriptors), last, 30, 4, &by_words);
+          map, index, projectVocabulary().bag(query.features.descriptors), last,
+          std::numeric_limits<double>::infinity(), 30, 4, &by_words);  // unbounded: the worst case
       benchmark::DoNotOptimize(relocalisationCandidates(map, query.sbi, benchCamera(), 4, &shortlist));
     } else {
       benchmark::DoNotOptimize(relocalisationCandidates(map, query.sbi, benchCamera(), 4));

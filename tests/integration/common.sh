@@ -74,3 +74,16 @@ localise_in_saved_map() {
   [ "$(awk '$1 == "keyframes" { print $2 }' "$WORK/localise.out")" -eq 0 ] || fail "localise-only added keyframes"
   awk -v a="$ate" -v b="$ate_bound" 'BEGIN { exit !(a <= b) }' || fail "localise-only ATE $ate m exceeds $ate_bound m"
 }
+
+# run_slam NAME SPEC KEYS [rgbd-slam options]: rgbd-slam --deterministic on synth:SPEC
+# ($WORK/NAME.txt, summary $WORK/NAME.out); prints the summary lines whose key matches the
+# extended regular expression KEYS, prefixed with NAME.
+run_slam() {
+  local name=$1 spec=$2 keys=$3
+  shift 3
+  "$PROCS/rgbd-slam" --source "synth:$spec" --output "$WORK/$name.txt" --deterministic --quiet "$@" \
+      > "$WORK/$name.out" 2> "$WORK/$name.err" || fail "rgbd-slam $spec failed: $(tail -5 "$WORK/$name.err")"
+  grep -E "^($keys) " "$WORK/$name.out" | sed "s/^/$name: /"
+}
+# summary_value NAME KEY: the value of KEY in run NAME's summary (empty if missing).
+summary_value() { awk -v k="$2" '$1 == k { print $2 }' "$WORK/$1.out"; }

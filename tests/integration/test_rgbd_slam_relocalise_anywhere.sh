@@ -11,14 +11,9 @@
 # 2026-11-25: gap the same (339/340, 1.88 mm); cover 233/250 posed (back at frame 267), ATE 3.4 mm.
 source "$(dirname "$0")/common.sh"
 
-run() {  # run NAME SPEC [rgbd-slam options]
-  local name=$1 spec=$2
-  shift 2
-  "$PROCS/rgbd-slam" --source "synth:$spec" --output "$WORK/$name.txt" --deterministic --quiet "$@" \
-      > "$WORK/$name.out" 2> "$WORK/$name.err" || fail "rgbd-slam $spec failed: $(tail -5 "$WORK/$name.err")"
-  grep -E "^(frames|poses|relocalisations|ate_rmse_m|jumps_while_tracking) " "$WORK/$name.out" | sed "s/^/$name: /"
-}
-value() { awk -v k="$2" '$1 == k { print $2 }' "$WORK/$1.out"; }
+keys="frames|poses|relocalisations|ate_rmse_m|jumps_while_tracking"
+run() { run_slam "$1" "$2" "$keys" "${@:3}"; }
+value() { summary_value "$@"; }
 
 check_gap() {  # check_gap NAME
   [ "$(value "$1" frames)" -eq 340 ] || fail "$1: saw $(value "$1" frames) frames, expected 340"

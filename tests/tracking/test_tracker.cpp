@@ -295,6 +295,41 @@ TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
   EXPECT_TRUE(recovered);
 }
 
+// A vehicle cannot be where it could not have flown (tracker.relocalise_max_speed_m_s):
+// lost at frame 151, then shown frames 290-299 (1.27-1.39 m from the last pose) stamped
+// as if they came right after it, the tracker stays lost, since 3 m/s for a frame (33 ms)
+// plus 1 m for the last pose's error does not reach that far; at their own time (4.6 s
+// later), or without the bound, it relocalises there.
+TEST(Tracker, RelocalisesOnlyWhereTheVehicleCouldHaveFlown) {
+  struct Case {
+    double max_speed_m_s;
+    bool stamped_early;
+    bool relocalises;
+  };
+  for (const Case c : {Case{3.0, true, false}, Case{3.0, false, true}, Case{0.0, true, true}}) {
+    TrackerOptions options;
+    options.relocalise_max_speed_m_s = c.max_speed_m_s;
+    Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
+    ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+    RgbdFrame black = roomFrame(151);
+    black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
+    black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+    ASSERT_EQ(tracker.track(black).status, Status::kLost);
+    std::optional<size_t> relocalised_at;
+    for (size_t i = 290; i < 300 && !relocalised_at; ++i) {
+      RgbdFrame frame = roomFrame(i);
+      if (c.stamped_early) frame.utime = roomFrame(151).utime + static_cast<int64_t>(i - 290);
+      const TrackResult result = tracker.track(frame);
+      if (result.status == Status::kRelocalised) {
+        relocalised_at = i;
+        EXPECT_LT(positionError(result.pose.T_w_c, i), 0.05) << "frame " << i;
+      }
+    }
+    EXPECT_EQ(relocalised_at.has_value(), c.relocalises)
+        << "max speed " << c.max_speed_m_s << " m/s, " << (c.stamped_early ? "a frame" : "4.6 s") << " after the last pose";
+  }
+}
+
 // Lost for a frame, then a view whose left part is hidden (as by a glass cabinet passing
 // close by: most projected points cannot be found): from the last pose the quality is
 // only dodgy, yet the pose is fixed and right, so the tracker must come back there rather

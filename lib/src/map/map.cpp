@@ -164,4 +164,12 @@ std::vector<KeyframeId> Map::nearestKeyframes(const SE3& T_w_c, size_t n, double
   return out;
 }
 
+std::vector<KeyframeId> Map::keyframesWithin(const SE3& T_w_c, double radius_m) const {
+  std::vector<KeyframeId> out;
+  for (const auto& [id, kf] : keyframes_) {
+    if ((kf->T_w_c.translation() - T_w_c.translation()).norm() <= radius_m) out.push_back(id);
+  }
+  return out;
+}
+
 }  // namespace rgbdslam

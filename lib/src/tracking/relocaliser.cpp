@@ -36,13 +36,17 @@ std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
 }
 
 std::vector<KeyframeId> relocalisationShortlist(const Map& map, const BowIndex& index, const BowVector& bag,
-                                                const SE3& T_w_last, size_t n, size_t by_words_wanted,
-                                                std::vector<KeyframeId>* by_words) {
+                                                const SE3& T_w_last, double reach_m, size_t n,
+                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words) {
+  const auto beyond = [&](KeyframeId id) {
+    const Keyframe* keyframe = map.keyframe(id);
+    return !keyframe || (keyframe->T_w_c.translation() - T_w_last.translation()).norm() > reach_m;
+  };
   std::vector<KeyframeId> shortlist = map.nearestKeyframes(T_w_last, n / 2);
+  shortlist.erase(std::remove_if(shortlist.begin(), shortlist.end(), beyond), shortlist.end());
   if (bag.empty()) return shortlist;
   // Up to n / 2 of the best by words may be among the nearest already.
-  const std::vector<BowIndex::Hit> hits =
-      index.query(bag, std::max(n + n / 2, by_words_wanted), [&map](int id) { return !map.hasKeyframe(id); });
+  const std::vector<BowIndex::Hit> hits = index.query(bag, std::max(n + n / 2, by_words_wanted), beyond);
   for (const BowIndex::Hit& hit : hits) {
     if (by_words && by_words->size() < by_words_wanted) by_words->push_back(hit.image);
     if (shortlist.size() < n && std::find(shortlist.begin(), shortlist.end(), hit.image) == shortlist.end()) {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <deque>
 #include <future>
+#include <limits>
 #include <malloc.h>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -231,6 +232,7 @@ class Tracker::Impl {
     velocity_.setZero();
     lost_velocity_.setZero();
     lost_frames_ = 0;
+    last_pose_utime_.reset();
     frames_since_keyframe_ = 0;
     uncertain_frames_ = 0;
     next_keyframe_id_ = 0;
@@ -342,16 +344,19 @@ class Tracker::Impl {
   // updateLocalMap (which moves extras to the store).
   const KeyframeExtras* extrasOf(KeyframeId id);
   bool anyExtras() const;
-  // Relocalisation by features (feature_relocaliser.h) against 'candidates', best first;
-  // '*features' holds the frame's ORB features once extracted (here, if not yet).
+  // Relocalisation by features (feature_relocaliser.h) against 'candidates', best first, to
+  // a pose within 'reach_m' of the last; '*features' holds the frame's ORB features once
+  // extracted (here, if not yet).
   std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame, const std::vector<KeyframeId>& candidates,
-                                              std::optional<Features3d>* features);
+                                              double reach_m, std::optional<Features3d>* features);
   Features3d frameFeatures(const RgbdFrame& frame) const;
   // Whether a lost frame is compared with a shortlist only (TrackerOptions::relocalise_shortlist).
   bool shortlisted() const;
-  // The shortlist: the keyframes nearest the last pose, then the best by bag of words; the
-  // feature relocaliser's candidates (the bag's best) go to '*by_words'.
-  std::vector<KeyframeId> relocalisationShortlist(const Features3d& features, std::vector<KeyframeId>* by_words);
+  // The shortlist: the keyframes nearest the last pose, then the best by bag of words, all
+  // within 'reach_m' of the last pose; the feature relocaliser's candidates (the bag's best)
+  // go to '*by_words'.
+  std::vector<KeyframeId> relocalisationShortlist(const Features3d& features, double reach_m,
+                                                  std::vector<KeyframeId>* by_words);
   // Adds the keyframes missing from the bag-of-words index (their extras read back if cold).
   void indexBags();
   void indexBag(KeyframeId id, const KeyframeExtras& extras);
@@ -388,6 +393,15 @@ class Tracker::Impl {
   // does not stop when its tracker loses it: relocalise() tries where it coasted to).
   Vec6 lost_velocity_ = Vec6::Zero();
   int lost_frames_ = 0;
+  // The time of the frame T_c_w_ was accepted on (none: a loaded map's start, where the
+  // camera may be anywhere in it).
+  std::optional<int64_t> last_pose_utime_;
+  // How far from the last pose the camera can be by 'frame' (TrackerOptions::
+  // relocalise_max_speed_m_s); infinite when unbounded.
+  double relocaliseReachM(const RgbdFrame& frame) const;
+  bool withinReach(const SE3& T_c_w, double reach_m) const {
+    return (T_c_w.inverse().translation() - T_c_w_.inverse().translation()).norm() <= reach_m;
+  }
   int frames_since_keyframe_ = 0;
   int uncertain_frames_ = 0;  // tracked frames in a row, since the last keyframe, with the
                               // pose sigma over keyframes.uncertain_pose_sigma_m
@@ -595,6 +609,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   frames_since_keyframe_ = 0;
   uncertain_frames_ = 0;
   T_c_w_ = SE3();
+  last_pose_utime_ = frame.utime;
   velocity_.setZero();
   state_ = TrackingState::kTracking;
   result.status = TrackStatus::kInitialised;
@@ -676,12 +691,18 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   std::optional<Features3d> features;       // the frame's ORB features, extracted at most once
   std::vector<KeyframeId> feature_candidates;
   std::vector<RelocalisationCandidate> ranked;
+  const double reach_m = relocaliseReachM(frame);
+  // A keyframe may see where the camera is from up to the depth range away.
+  const double keyframe_reach_m = reach_m + options_.keyframe_build.max_depth_m;
   if (shortlisted()) {
     features = frameFeatures(frame);
-    const std::vector<KeyframeId> shortlist = relocalisationShortlist(*features, &feature_candidates);
+    const std::vector<KeyframeId> shortlist = relocalisationShortlist(*features, keyframe_reach_m, &feature_candidates);
     ranked = relocalisationCandidates(replica_.map(), sbi_, camera_, wanted, &shortlist);
   } else {
-    ranked = relocalisationCandidates(replica_.map(), sbi_, camera_, wanted);
+    std::vector<KeyframeId> within;
+    if (std::isfinite(keyframe_reach_m)) within = replica_.map().keyframesWithin(T_c_w_.inverse(), keyframe_reach_m);
+    ranked = relocalisationCandidates(replica_.map(), sbi_, camera_, wanted,
+                                      std::isfinite(keyframe_reach_m) ? &within : nullptr);
     for (const RelocalisationCandidate& candidate : ranked) feature_candidates.push_back(candidate.keyframe);
   }
   std::vector<RelocalisationCandidate> candidates(
@@ -716,11 +737,12 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // glass cabinets close by) the quality stays below good although the pose is right,
     // and a tracker that lost such a stretch once would otherwise never come back.
     if (isLost(attempt) || (!near_last && attempt.quality < options_.quality.good)) continue;
+    if (!withinReach(attempt.T_c_w, reach_m)) continue;       // a lookalike place
     if (!integrityOf(attempt, frame).consistent()) continue;  // a wrong pose is worse than none
     velocity_.setZero();
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
-  if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, feature_candidates, &features)) {
+  if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, feature_candidates, reach_m, &features)) {
     velocity_.setZero();
     return accept(*attempt, frame, TrackingState::kRelocalised);
   }
@@ -785,11 +807,18 @@ bool Tracker::Impl::shortlisted() const {
          replica_.map().numKeyframes() > static_cast<size_t>(options_.relocalise_shortlist);
 }
 
-std::vector<KeyframeId> Tracker::Impl::relocalisationShortlist(const Features3d& features,
+double Tracker::Impl::relocaliseReachM(const RgbdFrame& frame) const {
+  constexpr double kLastPoseErrorM = 1.0;  // what the last pose itself may be off by [m]
+  if (options_.relocalise_max_speed_m_s <= 0.0 || !last_pose_utime_) return std::numeric_limits<double>::infinity();
+  const double lost_s = std::max(0.0, static_cast<double>(frame.utime - *last_pose_utime_) * 1e-6);
+  return options_.relocalise_max_speed_m_s * lost_s + kLastPoseErrorM;
+}
+
+std::vector<KeyframeId> Tracker::Impl::relocalisationShortlist(const Features3d& features, double reach_m,
                                                                std::vector<KeyframeId>* by_words) {
   if (features.size() > 0) indexBags();
   const BowVector bag = features.size() > 0 ? projectVocabulary().bag(features.descriptors) : BowVector{};
-  return rgbdslam::relocalisationShortlist(replica_.map(), bow_index_, bag, T_c_w_.inverse(),
+  return rgbdslam::relocalisationShortlist(replica_.map(), bow_index_, bag, T_c_w_.inverse(), reach_m,
                                            static_cast<size_t>(options_.relocalise_shortlist),
                                            static_cast<size_t>(options_.reloc_features.candidates), by_words);
 }
@@ -807,7 +836,7 @@ void Tracker::Impl::indexBag(KeyframeId id, const KeyframeExtras& extras) {
 }
 
 std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
-                                                           const std::vector<KeyframeId>& candidates,
+                                                           const std::vector<KeyframeId>& candidates, double reach_m,
                                                            std::optional<Features3d>* features) {
   const FeatureRelocaliserOptions& o = options_.reloc_features;
   if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || !anyExtras()) return std::nullopt;
@@ -841,7 +870,7 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
       }
       attempt = again;
     }
-    if (!integrityOf(attempt, frame).consistent()) continue;
+    if (!withinReach(attempt.T_c_w, reach_m) || !integrityOf(attempt, frame).consistent()) continue;
     return attempt;
   }
   return std::nullopt;
@@ -1192,6 +1221,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const TrackingState keyframe_grade = grade.value_or(state);
   if (state != TrackingState::kRelocalised) velocity_ = (attempt.T_c_w * T_c_w_.inverse()).log();
   T_c_w_ = attempt.T_c_w;
+  last_pose_utime_ = frame.utime;
   last_quality_ = attempt.quality;
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
   updateDepthReference(attempt, frame);

@@ -96,6 +96,9 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_coast_frames", &relocalise_coast_frames, 0, 1000, "frames",
           "for this many frames after a loss also try the pose the last velocity carried the camera to "
           "(0: the last pose only)");
+  r->bind(s, "relocalise_max_speed_m_s", &relocalise_max_speed_m_s, 0.0, 1000.0, "m/s",
+          "a relocalised pose lies within this speed times the time since the last pose, plus 1 m, "
+          "of the last pose; farther lookalike places are refused (0: anywhere)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   photometric.bind(r, s);

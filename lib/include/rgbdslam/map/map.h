@@ -131,6 +131,8 @@ class Map {
   // direction (metres per radian, PTAM-like), nearest first.
   std::vector<KeyframeId> nearestKeyframes(const SE3& T_w_c, size_t n,
                                            double metres_per_radian = 0.5) const;
+  // The keyframes whose camera centre is within 'radius_m' of T_w_c's, in id order.
+  std::vector<KeyframeId> keyframesWithin(const SE3& T_w_c, double radius_m) const;
 
  private:
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;

@@ -38,10 +38,11 @@ std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
 // A lost frame's shortlist on a large map (tracker.relocalise_shortlist = n): the n / 2
 // keyframes nearest 'T_w_last' (the last good pose: a short disturbance), then the best by
 // bag of words over all keyframes in 'index' (images = keyframe ids; ids not in the map are
-// skipped) up to n in all. The bag's best 'by_words_wanted' go to '*by_words' as well (the
-// feature relocaliser's candidates; may be null). 'bag' empty (no features): the nearest only.
+// skipped) up to n in all; only keyframes within 'reach_m' of T_w_last (infinity: all). The
+// bag's best 'by_words_wanted' go to '*by_words' as well (the feature relocaliser's
+// candidates; may be null). 'bag' empty (no features): the nearest only.
 std::vector<KeyframeId> relocalisationShortlist(const Map& map, const BowIndex& index, const BowVector& bag,
-                                                const SE3& T_w_last, size_t n, size_t by_words_wanted,
-                                                std::vector<KeyframeId>* by_words);
+                                                const SE3& T_w_last, double reach_m, size_t n,
+                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words);
 
 }  // namespace rgbdslam

@@ -157,6 +157,14 @@ struct TrackerOptions {
   // loss the tracker also tries the pose the velocity at the loss carried it to (the flight's
   // first 720 frames: ATE 10.5 mm instead of 0.63 m). 0: the last pose only.
   int relocalise_coast_frames = 30;  // [frames]
+  // Nor does it fly faster than it can: a relocalised pose must lie within this speed times
+  // the time since the last pose (plus 1 m for that pose's own error) of the last pose, and
+  // only keyframes within that reach plus the sensor's depth range are candidates. Without
+  // it a lookalike place anywhere in the map is as good as the right one (synth:twins: after
+  // a 1 s cover in the second room the tracker relocalised 14 m back into the first). A
+  // camera carried elsewhere is found again once the time lost allows the distance.
+  // 0: anywhere at once (a hand-held camera).
+  double relocalise_max_speed_m_s = 3.0;  // [m/s]
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
   PhotometricIntegrityOptions photometric;  // every pose against the image (every mode)
