@@ -809,8 +809,12 @@ bool Tracker::Impl::shortlisted() const {
 
 double Tracker::Impl::relocaliseReachM(const RgbdFrame& frame) const {
   constexpr double kLastPoseErrorM = 1.0;  // what the last pose itself may be off by [m]
-  if (options_.relocalise_max_speed_m_s <= 0.0 || !last_pose_utime_) return std::numeric_limits<double>::infinity();
-  const double lost_s = std::max(0.0, static_cast<double>(frame.utime - *last_pose_utime_) * 1e-6);
+  // No last pose (a loaded map's start), or time gone back (a log replayed again): the
+  // clock does not tell how far the camera went.
+  if (options_.relocalise_max_speed_m_s <= 0.0 || !last_pose_utime_ || frame.utime < *last_pose_utime_) {
+    return std::numeric_limits<double>::infinity();
+  }
+  const double lost_s = static_cast<double>(frame.utime - *last_pose_utime_) * 1e-6;
   return options_.relocalise_max_speed_m_s * lost_s + kLastPoseErrorM;
 }
 

@@ -162,7 +162,8 @@ struct TrackerOptions {
   // only keyframes within that reach plus the sensor's depth range are candidates. Without
   // it a lookalike place anywhere in the map is as good as the right one (synth:twins: after
   // a 1 s cover in the second room the tracker relocalised 14 m back into the first). A
-  // camera carried elsewhere is found again once the time lost allows the distance.
+  // camera carried elsewhere is found again once the time lost allows the distance. A frame
+  // stamped before the last pose (a log replayed again) is not bounded.
   // 0: anywhere at once (a hand-held camera).
   double relocalise_max_speed_m_s = 3.0;  // [m/s]
   int random_seed = 1;             // seed of the point subset selection (deterministic)
