@@ -65,7 +65,7 @@ TEST(Map, MeasurementsOfAnAddedKeyframeAreIndexed) {
 TEST(Map, KeyframesWithinADistanceOfACamera) {
   Map map = threeViews();
   for (KeyframeId id : {0, 1, 2}) map.keyframe(id)->T_w_c = SE3(Mat3::Identity(), Vec3(2.0 * id, 0, 0));
-  const SE3 camera(Mat3::Identity(), Vec3(1.0, 0.5, 0));  // 1.1 m from 0 and 1, 3.0 m from 2
+  const SE3 camera(Mat3::Identity(), Vec3(1.0, 0.5, 0));  // 1.12 m from 0 and 1, 3.04 m from 2
   EXPECT_EQ(map.keyframesWithin(camera, 1.2), (std::vector<KeyframeId>{0, 1}));
   EXPECT_EQ(map.keyframesWithin(camera, 1.0), (std::vector<KeyframeId>{}));
   EXPECT_EQ(map.keyframesWithin(camera, 3.1), (std::vector<KeyframeId>{0, 1, 2}));

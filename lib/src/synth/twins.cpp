@@ -2,7 +2,7 @@
 // that looks around the first, crosses into the second and looks around it from the same
 // spot, then flies back. A place recogniser sees the second room as the first one again
 // (perceptual aliasing): only odometry can tell them apart. Issue 11 asks that no loop is
-// closed between them, and that the return to the first room is recognised as a return.
+// closed between them, and that a lost tracker does not come back in the wrong one.
 //
 // Floor plan (x east, y north, z up from the floor at 0; metres):
 //   closet      [-1.5, 0] x [2.5, 4.5]  behind A's west door
