@@ -184,5 +184,48 @@ TEST(Corners, ShiTomasiRanksCornersAboveEdgesAndFlats) {
   EXPECT_NEAR(shiTomasiScore(rotated, {19, 19}, 3), corner, 1e-3f);
 }
 
+// A ramp (which the noise estimator must ignore) with Gaussian noise of 'sigma' grey levels.
+cv::Mat noisyRamp(double sigma, uint64_t seed) {
+  cv::Mat ramp(480, 640, CV_32F);
+  for (int y = 0; y < ramp.rows; ++y) {
+    for (int x = 0; x < ramp.cols; ++x) ramp.at<float>(y, x) = 60.0f + 0.15f * x + 0.1f * y;
+  }
+  cv::Mat noise(ramp.size(), CV_32F);
+  cv::RNG rng(seed);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  cv::Mat image;
+  cv::Mat(ramp + noise).convertTo(image, CV_8U);  // rounds and saturates
+  return image;
+}
+
+TEST(Corners, NoiseSigmaOfGaussianNoiseOnARamp) {
+  EXPECT_LT(imageNoiseSigma(noisyRamp(0.0, 1)), 0.4);  // the ramp's rounding only
+  for (const double sigma : {1.5, 3.0, 6.0}) {
+    EXPECT_NEAR(imageNoiseSigma(noisyRamp(sigma, 2)), sigma, 0.1 * sigma) << sigma;
+  }
+  EXPECT_EQ(imageNoiseSigma(cv::Mat(2, 2, CV_8UC1, cv::Scalar(7))), 0.0);
+}
+
+// What DepthPointOptions' weak floor rests on: in pure noise the Shi-Tomasi score averages
+// at most noiseShiTomasiScore(sigma) and almost never reaches four times it.
+TEST(Corners, NoiseAloneSeldomScoresFourTimesItsMeanScore) {
+  const double sigma = 3.0;
+  const cv::Mat image = noisyRamp(sigma, 3);
+  const double noise_score = noiseShiTomasiScore(sigma);
+  double sum = 0.0;
+  int windows = 0, over = 0;
+  for (int y = 8; y < image.rows - 8; y += 3) {
+    for (int x = 8; x < image.cols - 8; x += 3) {
+      const double score = shiTomasiScore(image, {x, y});
+      sum += score;
+      over += score >= 4.0 * noise_score ? 1 : 0;
+      ++windows;
+    }
+  }
+  EXPECT_GT(sum / windows, 0.5 * noise_score);
+  EXPECT_LT(sum / windows, noise_score);
+  EXPECT_LT(over, windows / 10000 + 1) << over << " of " << windows;
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -1,21 +1,25 @@
 #!/usr/bin/env bash
-# The flight's first 720 frames (synth:flight, 24 s: a room, then corridor C1 at up to 2 m/s).
-# At 2 m/s a tracker that loses the camera for a few frames finds it 0.3 m on: relocalising
-# from the last pose alone took a wrong pose there (ATE 0.63 m); trying the pose the velocity
-# at the loss carried the camera to (tracker.relocalise_coast_frames) keeps the flight
-# within centimetres. Measured 2026-11-25: 719 / 720 posed, 1 relocalisation, ATE 10.5 mm,
-# no jump over 2 cm while reported tracking; with --set tracker.relocalise_coast_frames=0
-# 717 / 720 posed, ATE 0.63 m.
+# The flight's first 720 frames (synth:flight, 24 s: a room, then corridor C1 at up to 2 m/s),
+# the camera covered for 0.5 s at 2 m/s in C1 (frames 640-654), so the tracker finds it 1 m
+# on. Relocalising from the last pose alone never finds it again there; trying the pose the
+# velocity at the loss carried the camera to (tracker.relocalise_coast_frames) does.
+# Measured 2026-11-26: 702 / 705 uncovered frames posed, ATE 5.9 mm, no jump over 2 cm
+# while reported tracking; with --set tracker.relocalise_coast_frames=0 lost for good (640
+# posed). The cover replaced the flight's own loss near frame 658, which the tracker no
+# longer has since keyframes take weak corners down to the image noise (point_creation.h).
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.1
 
-"$PROCS/rgbd-slam" --source synth:flight,frames=720 --output "$WORK/t.txt" --deterministic --quiet \
-    > "$WORK/out" 2> "$WORK/err" || fail "rgbd-slam failed: $(tail -5 "$WORK/err")"
-grep -E "^(frames|poses|relocalisations|ate_rmse_m|jumps_while_tracking) " "$WORK/out"
-[ "$(summary frames)" -eq 720 ] || fail "rgbd-slam saw $(summary frames) frames, expected 720"
-[ "$(summary poses)" -ge 700 ] || fail "only $(summary poses) of 720 frames posed"
-[ "$(summary relocalisations)" -ge 1 ] || fail "never lost and relocalised: the test no longer tests the coasted pose"
-awk -v a="$(summary ate_rmse_m)" -v b="$ATE_BOUND_M" 'BEGIN { exit !(a <= b) }' \
-  || fail "ATE $(summary ate_rmse_m) m over $ATE_BOUND_M m"
-[ "$(summary jumps_while_tracking)" -eq 0 ] || fail "$(summary jumps_while_tracking) jumps over 2 cm while reported tracking"
+SPEC=flight,frames=720,cover=640-654
+KEYS="frames|poses|relocalisations|ate_rmse_m|jumps_while_tracking"
+run_slam coasting "$SPEC" "$KEYS"
+[ "$(summary_value coasting frames)" -eq 720 ] || fail "rgbd-slam saw $(summary_value coasting frames) frames, expected 720"
+[ "$(summary_value coasting poses)" -ge 690 ] || fail "only $(summary_value coasting poses) of 720 frames posed (705 uncovered)"
+[ "$(summary_value coasting relocalisations)" -ge 1 ] || fail "never lost and relocalised: the test no longer tests the coasted pose"
+awk -v a="$(summary_value coasting ate_rmse_m)" -v b="$ATE_BOUND_M" 'BEGIN { exit !(a <= b) }' \
+  || fail "ATE $(summary_value coasting ate_rmse_m) m over $ATE_BOUND_M m"
+[ "$(summary_value coasting jumps_while_tracking)" -eq 0 ] || fail "$(summary_value coasting jumps_while_tracking) jumps over 2 cm while reported tracking"
+# The control: without coasting the cover must cost the flight's end, or the test tests nothing.
+run_slam still "$SPEC" "$KEYS" --set tracker.relocalise_coast_frames=0
+[ "$(summary_value still poses)" -lt 690 ] || fail "without coasting $(summary_value still poses) frames posed: the cover no longer needs the coasted pose"
 echo "PASS"

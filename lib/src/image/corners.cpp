@@ -283,4 +283,24 @@ float shiTomasiScore(const cv::Mat& image, cv::Point2i p, int half_window) {
   return static_cast<float>(half_trace - std::sqrt(half_diff * half_diff + b * b));
 }
 
+double imageNoiseSigma(const cv::Mat& image) {
+  assert(image.type() == CV_8UC1);
+  if (image.cols < 3 || image.rows < 3) return 0.0;
+  int64_t sum = 0, count = 0;
+  for (int y = 1; y < image.rows - 1; y += 2) {
+    const uint8_t* up = image.ptr<uint8_t>(y - 1);
+    const uint8_t* row = image.ptr<uint8_t>(y);
+    const uint8_t* down = image.ptr<uint8_t>(y + 1);
+    for (int x = 1; x < image.cols - 1; ++x) {
+      const int r = up[x - 1] - 2 * up[x] + up[x + 1] - 2 * row[x - 1] + 4 * row[x] - 2 * row[x + 1] +
+                    down[x - 1] - 2 * down[x] + down[x + 1];
+      sum += r < 0 ? -r : r;
+    }
+    count += image.cols - 2;
+  }
+  // The operator's response to unit-variance noise has standard deviation 6; the mean of a
+  // Gaussian's absolute value is sqrt(2 / pi) times its standard deviation.
+  return std::sqrt(M_PI / 2.0) * static_cast<double>(sum) / (6.0 * static_cast<double>(count));
+}
+
 }  // namespace rgbdslam

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "rgbdslam/image/corners.h"
+
 namespace rgbdslam {
 
 void DepthPointOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -11,8 +13,11 @@ void DepthPointOptions::bind(OptionRegistry* r, const std::string& s) {
           "new points from depth per keyframe and pyramid level at most");
   r->bind(s, "depth_points_min_shi_tomasi", &min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
           "weaker corners give no point");
+  r->bind(s, "depth_points_weak_noise_ratio", &weak_noise_ratio, 0.0, 1e6, "",
+          "a keyframe with few points also takes corners down to this multiple of the score "
+          "its image noise gives...");
   r->bind(s, "depth_points_weak_min_shi_tomasi", &weak_min_shi_tomasi, 0.0, 1e6, "(grey/px)^2",
-          "a keyframe with few points also takes corners down to this score...");
+          "...but not below this score...");
   r->bind(s, "depth_points_weak_until_points", &weak_until_points, 0, 100000, "points",
           "...until it measures this many points (0: never)");
   r->bind(s, "depth_points_min_separation_px", &min_separation_px, 0.0, 100.0, "px",
@@ -98,10 +103,11 @@ struct Candidate {
   cv::Point2i corner;
 };
 
-// One pass over the levels: the keyframe's maxima with Shi-Tomasi score >= min_score,
+// One pass over the levels: the keyframe's maxima with Shi-Tomasi score >= min_score[level],
 // strongest first per level, that are free in 'grid' and have a stable depth.
 void addPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
-                        const DepthPointOptions& options, double min_score, size_t max_total,
+                        const DepthPointOptions& options, const std::vector<double>& min_score,
+                        size_t max_total,
                         PointId first_id, bool dense, SeparationGrid* grid,
                         std::vector<NewPoint>* created) {
   for (int level = 0; level < static_cast<int>(keyframe.corners.size()); ++level) {
@@ -113,7 +119,7 @@ void addPointsFromDepth(const Keyframe& keyframe, const PinholeCamera& camera,
         continue;
       }
       const float score = shiTomasiScore(image, c);
-      if (score >= min_score) candidates.push_back({score, c});
+      if (score >= min_score[level]) candidates.push_back({score, c});
     }
     std::sort(candidates.begin(), candidates.end(),
               [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
@@ -145,16 +151,31 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
   for (const auto& [point_id, m] : keyframe.measurements()) grid.occupy(m.uv);
   const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
-  addPointsFromDepth(keyframe, camera, options, options.min_shi_tomasi, SIZE_MAX, first_id, dense,
-                     &grid, &created);
+  const size_t levels = keyframe.corners.size();
+  addPointsFromDepth(keyframe, camera, options, std::vector<double>(levels, options.min_shi_tomasi),
+                     SIZE_MAX, first_id, dense, &grid, &created);
   const size_t measured = keyframe.measurements().size() + created.size();
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
-  if (measured < wanted && options.weak_min_shi_tomasi < options.min_shi_tomasi) {
+  if (measured < wanted) {
     // The second pass sees the strong corners again; they are taken or not free any more.
-    addPointsFromDepth(keyframe, camera, options, options.weak_min_shi_tomasi,
+    addPointsFromDepth(keyframe, camera, options, weakScoreFloors(keyframe.pyramid, options),
                        created.size() + (wanted - measured), first_id, dense, &grid, &created);
   }
   return created;
+}
+
+std::vector<double> weakScoreFloors(const ImagePyramid& pyramid, const DepthPointOptions& options) {
+  std::vector<double> floors(pyramid.levels.size(), options.min_shi_tomasi);
+  if (pyramid.levels.empty()) return floors;
+  // Level 0 has the most pixels and the least texture per pixel, so its estimate is the
+  // tightest; each 2x2 average halves the noise's standard deviation.
+  double sigma = imageNoiseSigma(pyramid.levels[0]);
+  for (double& floor : floors) {
+    const double weak = std::max(options.weak_min_shi_tomasi, options.weak_noise_ratio * noiseShiTomasiScore(sigma));
+    floor = std::min(floor, weak);
+    sigma *= 0.5;
+  }
+  return floors;
 }
 
 }  // namespace rgbdslam

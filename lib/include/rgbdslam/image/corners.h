@@ -79,4 +79,14 @@ int fastScore(const cv::Mat& image, cv::Point2i p);
 // [(grey levels / px)^2]. Returns 0 when the window and its gradient margin leave the image.
 float shiTomasiScore(const cv::Mat& image, cv::Point2i p, int half_window = kShiTomasiHalfWindow);
 
+// The image noise's standard deviation [grey levels], by Immerkaer's estimator ("Fast noise
+// variance estimation", CVIU 1996): the mean absolute response to the difference of two
+// Laplacians, which cancels intensity ramps, over every interior pixel of every other row.
+// Texture and edges add to it, so it bounds the noise from above. 0 for images under 3x3.
+double imageNoiseSigma(const cv::Mat& image);
+
+// The Shi-Tomasi score image noise of 'sigma' alone gives, on average: central-difference
+// gradients of independent pixel noise have variance sigma^2 / 2 in each direction.
+inline double noiseShiTomasiScore(double sigma) { return 0.5 * sigma * sigma; }
+
 }  // namespace rgbdslam
