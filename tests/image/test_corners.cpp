@@ -206,25 +206,27 @@ TEST(Corners, NoiseSigmaOfGaussianNoiseOnARamp) {
   EXPECT_EQ(imageNoiseSigma(cv::Mat(2, 2, CV_8UC1, cv::Scalar(7))), 0.0);
 }
 
-// What DepthPointOptions' weak floor rests on: in pure noise the Shi-Tomasi score averages
-// at most noiseShiTomasiScore(sigma) and almost never reaches four times it.
-TEST(Corners, NoiseAloneSeldomScoresFourTimesItsMeanScore) {
+// What DepthPointOptions' weak floor (four times noiseShiTomasiScore) rests on: in pure
+// noise the Shi-Tomasi score averages about 0.8 times noiseShiTomasiScore(sigma), and no
+// window of the ~32000 here reaches three times it.
+TEST(Corners, NoiseAloneScoresUnderThreeTimesTheNoiseScore) {
   const double sigma = 3.0;
   const cv::Mat image = noisyRamp(sigma, 3);
   const double noise_score = noiseShiTomasiScore(sigma);
-  double sum = 0.0;
-  int windows = 0, over = 0;
+  double sum = 0.0, highest = 0.0;
+  int windows = 0;
   for (int y = 8; y < image.rows - 8; y += 3) {
     for (int x = 8; x < image.cols - 8; x += 3) {
       const double score = shiTomasiScore(image, {x, y});
       sum += score;
-      over += score >= 4.0 * noise_score ? 1 : 0;
+      highest = std::max(highest, score);
       ++windows;
     }
   }
-  EXPECT_GT(sum / windows, 0.5 * noise_score);
-  EXPECT_LT(sum / windows, noise_score);
-  EXPECT_LT(over, windows / 10000 + 1) << over << " of " << windows;
+  EXPECT_GT(windows, 30000);
+  EXPECT_GT(sum / windows, 0.7 * noise_score);
+  EXPECT_LT(sum / windows, 0.9 * noise_score);
+  EXPECT_LT(highest, 3.0 * noise_score) << highest / noise_score << "x";
 }
 
 }  // namespace

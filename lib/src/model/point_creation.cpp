@@ -157,7 +157,8 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   const size_t measured = keyframe.measurements().size() + created.size();
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
   if (measured < wanted) {
-    // The second pass sees the strong corners again; they are taken or not free any more.
+    // The second pass sees the strong corners again: taken or not free any more, except
+    // those a level's max_points_per_level cut (the count restarts per pass).
     addPointsFromDepth(keyframe, camera, options, weakScoreFloors(keyframe.pyramid, options),
                        created.size() + (wanted - measured), first_id, dense, &grid, &created);
   }
