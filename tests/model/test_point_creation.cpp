@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace rgbdslam {
 namespace {
@@ -34,6 +37,37 @@ TEST(PointCreation, WeakCornersMustStandAboveTheImageNoise) {
   options.weak_noise_ratio = 0.0;
   options.weak_min_shi_tomasi = 10.0;
   for (double floor : weakScoreFloors(noisyGreyPyramid(3.0), options)) EXPECT_EQ(floor, 10.0);
+}
+
+// A keyframe at the origin seeing a wall of random 4x4 px squares 2 m away: corners at
+// every level, each with depth.
+std::unique_ptr<Keyframe> texturedWallKeyframe() {
+  cv::Mat small(120, 160, CV_8UC1);
+  cv::RNG rng(7);
+  rng.fill(small, cv::RNG::UNIFORM, 0, 256);
+  KeyframeData data;
+  cv::resize(small, data.grey, cv::Size(640, 480), 0, 0, cv::INTER_NEAREST);
+  data.depth_scale = 5000.0;
+  data.depth = cv::Mat(480, 640, CV_16UC1, cv::Scalar(10000));  // 2 m
+  return makeKeyframe(data, KeyframeBuildOptions{});
+}
+
+TEST(PointCreation, NoWeakPassWithoutAWeakFloor) {
+  const auto keyframe = texturedWallKeyframe();
+  DepthPointOptions options;
+  options.max_points_per_level = 5;
+  options.weak_until_points = 100000;
+  options.weak_noise_ratio = 0.0;
+  // Floors equal to min_shi_tomasi: no second pass, so no level gives more than its cut.
+  options.weak_min_shi_tomasi = options.min_shi_tomasi;
+  const auto strong = createPointsFromDepth(*keyframe, PinholeCamera{}, options, 0);
+  ASSERT_GT(strong.size(), 5u);
+  std::vector<int> per_level(kMaxLevels, 0);
+  for (const NewPoint& p : strong) ++per_level.at(p.point.source_level);
+  for (int level = 0; level < kMaxLevels; ++level) EXPECT_LE(per_level[level], 5) << level;
+  // A floor just under it: the second pass runs and takes more (its count restarts).
+  options.weak_min_shi_tomasi = options.min_shi_tomasi - 0.5;
+  EXPECT_GT(createPointsFromDepth(*keyframe, PinholeCamera{}, options, 0).size(), strong.size());
 }
 
 }  // namespace

@@ -156,12 +156,14 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
                      SIZE_MAX, first_id, dense, &grid, &created);
   const size_t measured = keyframe.measurements().size() + created.size();
   const size_t wanted = static_cast<size_t>(std::max(0, options.weak_until_points));
-  if (measured < wanted) {
-    // The second pass sees the strong corners again: taken or not free any more, except
-    // those a level's max_points_per_level cut (the count restarts per pass).
-    addPointsFromDepth(keyframe, camera, options, weakScoreFloors(keyframe.pyramid, options),
-                       created.size() + (wanted - measured), first_id, dense, &grid, &created);
-  }
+  if (measured >= wanted) return created;
+  const std::vector<double> floors = weakScoreFloors(keyframe.pyramid, options);
+  // No level with a floor under min_shi_tomasi: the second pass would only see the strong
+  // corners again, and could retake those a level's max_points_per_level cut (the count
+  // restarts per pass), which is not what it is for.
+  if (std::none_of(floors.begin(), floors.end(), [&](double f) { return f < options.min_shi_tomasi; })) return created;
+  addPointsFromDepth(keyframe, camera, options, floors, created.size() + (wanted - measured), first_id, dense,
+                     &grid, &created);
   return created;
 }
 
