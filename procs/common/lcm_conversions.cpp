@@ -327,7 +327,7 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   msg.width = keyframe.grey.cols;
   msg.height = keyframe.grey.rows;
   msg.grey_format = encoding.jpeg_grey ? rgbdslam::keyframe_t::GREY_JPEG : rgbdslam::keyframe_t::GREY_PNG;
-  msg.grey = encoding.jpeg_grey ? encodeJpeg(keyframe.grey, encoding.jpeg_quality) : encodePng(keyframe.grey);
+  msg.grey = encoding.jpeg_grey ? encodeJpeg(keyframe.grey, encoding.jpeg_quality, /*optimal_huffman=*/true) : encodePng(keyframe.grey);
   msg.grey_size = static_cast<int32_t>(msg.grey.size());
   using K = rgbdslam::keyframe_t;
   const bool inverse = encoding.inverse_depth_step > 0 && keyframe.depth_scale > 0;

@@ -115,6 +115,21 @@ TEST(Codec, JpegRoundTripIsClose) {
   EXPECT_FALSE(decodeImage(bytes.data(), 10, 3, 64, 48));             // truncated
 }
 
+TEST(Codec, OptimalHuffmanTablesKeepThePixelsInFewerBytes) {
+  cv::Mat image(480, 640, CV_8UC1);
+  cv::randu(image, 0, 255);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 1.5);
+  for (int quality : {30, 75}) {
+    const auto standard = encodeJpeg(image, quality);
+    const auto optimal = encodeJpeg(image, quality, /*optimal_huffman=*/true);
+    EXPECT_LT(optimal.size(), standard.size()) << quality;
+    auto a = decodeImage(standard.data(), standard.size(), 1, 640, 480);
+    auto b = decodeImage(optimal.data(), optimal.size(), 1, 640, 480);
+    ASSERT_TRUE(a && b) << quality;
+    EXPECT_EQ(cv::norm(*a, *b, cv::NORM_INF), 0.0) << quality;  // the same coefficients
+  }
+}
+
 TEST(Codec, PngRoundTripIsExact) {
   cv::Mat grey(48, 64, CV_8UC1);
   cv::randu(grey, 0, 255);

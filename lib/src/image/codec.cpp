@@ -11,9 +11,9 @@
 
 namespace rgbdslam {
 
-std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality) {
+std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_huffman) {
   std::vector<uint8_t> out;
-  cv::imencode(".jpg", image, out, {cv::IMWRITE_JPEG_QUALITY, quality});
+  cv::imencode(".jpg", image, out, {cv::IMWRITE_JPEG_QUALITY, quality, cv::IMWRITE_JPEG_OPTIMIZE, optimal_huffman ? 1 : 0});
   return out;
 }
 
