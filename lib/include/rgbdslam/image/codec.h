@@ -16,8 +16,8 @@ constexpr uint32_t kMaxDecodedSide = 65535;  // [px], JPEG's own limit
 // 8-bit grey or BGR image -> JPEG bytes; quality in [1, 100]. optimal_huffman: Huffman
 // tables made for this image (libjpeg's optimize_coding) instead of the standard ones: the
 // same decoded pixels in fewer bytes, for a second pass over the coefficients. Measured on
-// 30 grey frames of synth:corridor and 20 of TUM fr3/teddy (640x480): 7 % fewer bytes at
-// quality 75, 20 % / 12 % at quality 30, for +0.3-0.5 ms per image (0.4 -> 0.7-1.0 ms).
+// 30 grey frames of synth:corridor and 20 of TUM fr3/teddy (640x480): 7 % / 4 % fewer bytes
+// at quality 75, 20 % / 12 % at quality 30, for +0.3-0.5 ms per image (0.4 -> 0.7-1.0 ms).
 // For what crosses the radio link; frames on the host's own network keep the faster pass.
 std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_huffman = false);
 // 8-bit image -> PNG bytes (lossless).
