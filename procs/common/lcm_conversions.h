@@ -56,6 +56,10 @@ struct KeyframeEncoding {
   // > 0: depth as quantised inverse depth in steps of this [1/m] (DEPTH_INVERSE_ZSTD*,
   // image/codec.h); 0: zlib, lossless.
   double inverse_depth_step = 0.0;
+  // Depth only in the blocks a FAST corner of the grey image reaches (cornerBlockMask;
+  // corners a little below the default thresholds, lcm_conversions.cpp), no reading
+  // elsewhere: all the mapper reads. A corridor frame at the quarter step: 6.6 -> 3.8 kB.
+  bool depth_near_corners = false;
 };
 rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding& encoding = {});
 Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);

@@ -51,6 +51,10 @@ std::vector<KeyframeEncoding> encodingLadder(const KeyframeEncoding& best, int m
     rung.depth_step = 4;
     ladder.push_back(rung);
   }
+  if (!rung.depth_near_corners) {
+    rung.depth_near_corners = true;
+    ladder.push_back(rung);
+  }
   if (!rung.jpeg_grey) {  // lossless PNG: JPEG at 90 (or the floor, if higher) is the first lossy rung
     rung.jpeg_grey = true;
     rung.jpeg_quality = std::max(90, min_jpeg_quality);

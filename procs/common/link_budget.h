@@ -14,10 +14,15 @@
 // What the budget does, and does not do:
 //   - Quality: each keyframe is encoded once, at a rung of a ladder of encodings chosen by
 //     how full the bucket is: the configured encoding while it is at least half full, then
-//     coarser depth (every 4th pixel and row), then JPEG quality in steps of 15 down to
-//     keyframe_min_jpeg_quality, then depth at every 8th pixel and row: the last rung, taken
-//     as the bucket nears empty (below 1 / (2 (rungs - 1)) of its capacity: 12.5 % with
-//     the default 5 rungs) and when it is empty or in debt. The
+//     coarser depth (every 4th pixel and row), then depth only near the grey image's FAST
+//     corners (KeyframeEncoding::depth_near_corners), then JPEG quality in steps of 15 down
+//     to keyframe_min_jpeg_quality, then depth at every 8th pixel and row: the last rung,
+//     taken as the bucket nears empty (below 1 / (2 (rungs - 1)) of its capacity: 10 % with
+//     the default 6 rungs) and when it is empty or in debt. Why depth away from the corners
+//     goes before any JPEG quality: the mapper reads no depth there, while its re-finding
+//     matches on the JPEG, and a lossier JPEG leaves more keyframes after culling (full
+//     corridor through the suite: 1.9-2.0 kept per metre, 1.5 with lossless grey images;
+//     docs/open_work.md, session 19). The
 //     tracker itself tracks against its own full-quality copy; the mapper's measurements in
 //     this keyframe (refinding, epipolar search) use what was sent.
 //   - Re-sends, receipts and status are never held back (they count): the mapper takes

@@ -30,6 +30,9 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "JPEG quality of keyframe images");
   r->bind(s, "keyframe_depth", &keyframe_encoding.depth_step, {{"full", 1}, {"half", 2}, {"quarter", 4}, {"eighth", 8}},
           "keyframe depth on the link: every pixel, or every 2nd, 4th or 8th pixel and row (the centre of each block)");
+  r->bind(s, "keyframe_depth_near_corners", &keyframe_encoding.depth_near_corners,
+          "keyframe depth on the link only near the image's FAST corners, where the mapper reads it, even with "
+          "the link budget to spare (the budget's second rung does this anyway)");
   r->bind(s, "keyframe_depth_step_sigma", &keyframe_depth_step_sigma, 0.0, 2.0, "sigma",
           "keyframe depth on the link as inverse depth in steps of this fraction of the noise "
           "model's depth sigma (rounding adds 0.29 times it in sigma; 0: lossless zlib)");

@@ -229,5 +229,24 @@ TEST(Corners, NoiseAloneScoresUnderThreeTimesTheNoiseScore) {
   EXPECT_LT(highest, 3.0 * noise_score) << highest / noise_score << "x";
 }
 
+TEST(Corners, BlockMaskCoversEachCornerWithAPixelOfItsLevel) {
+  std::vector<LevelCorners> corners(kMaxLevels);
+  corners[0].all = {cv::Point2i(10, 10)};  // level 0: pixels 8..12 -> blocks 2..3 (step 4)
+  corners[2].all = {cv::Point2i(10, 5)};   // level 2: (41.5, 21.5) +- 5 -> u 36.5..46.5, v 16.5..26.5
+  const cv::Mat mask = cornerBlockMask(corners, 4, cv::Size(64, 48));
+  ASSERT_EQ(mask.size(), cv::Size(16, 12));
+  cv::Mat expected(12, 16, CV_8UC1, cv::Scalar(0));
+  expected(cv::Range(2, 4), cv::Range(2, 4)).setTo(255);
+  expected(cv::Range(4, 7), cv::Range(9, 12)).setTo(255);
+  EXPECT_EQ(cv::countNonZero(mask != expected), 0);
+  // A corner at the edge keeps the edge blocks; a size that is not a multiple of the step rounds up.
+  corners = std::vector<LevelCorners>(1);
+  corners[0].all = {cv::Point2i(0, 0)};
+  const cv::Mat edge = cornerBlockMask(corners, 8, cv::Size(20, 10));
+  ASSERT_EQ(edge.size(), cv::Size(3, 2));
+  EXPECT_EQ(edge.at<uint8_t>(0, 0), 255);
+  EXPECT_EQ(cv::countNonZero(edge), 1);
+}
+
 }  // namespace
 }  // namespace rgbdslam

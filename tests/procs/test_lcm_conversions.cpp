@@ -4,6 +4,10 @@
 
 #include <cstring>
 
+#include "rgbdslam/image/corners.h"
+#include "rgbdslam/image/pyramid.h"
+#include "rgbdslam/model/noise_model.h"
+#include "rgbdslam/synth/scene.h"
 #include "sample_messages.h"
 
 namespace rgbdslam {
@@ -211,6 +215,49 @@ TEST(LcmConversions, KeyframeDepthAsInverseDepthAtEveryFourthPixel) {
       }
     }
   }
+}
+
+// Depth only near corners (the link budget's second rung): wherever the mapper can read
+// depth, at a corner it detects in the decoded JPEG and up to a pixel of the corner's level
+// away, the reading is the one the whole depth gives; and it costs far fewer bytes.
+TEST(LcmConversions, KeyframeDepthNearCornersKeepsWhatTheMapperReads) {
+  const SyntheticScene scene(*parseSyntheticSpec("corridor,frames=60"));
+  const RgbdFrame frame = scene.render(40);  // the corridor's plain walls
+  KeyframeData keyframe;
+  keyframe.id = 1;
+  keyframe.grey = frame.grey();
+  keyframe.depth = frame.depth;
+  keyframe.depth_scale = frame.depth_scale;
+  KeyframeEncoding whole{true, 45, 4};
+  whole.inverse_depth_step = 0.25 * NoiseModel{}.depth_sigma_a;
+  KeyframeEncoding near = whole;
+  near.depth_near_corners = true;
+  const rgbdslam::keyframe_t whole_msg = toLcm(keyframe, whole), near_msg = toLcm(keyframe, near);
+  EXPECT_EQ(near_msg.grey, whole_msg.grey);
+  EXPECT_LT(near_msg.depth.size(), whole_msg.depth.size() * 7 / 10);  // 3.8 of 6.6 kB
+  auto a = fromLcm(whole_msg);
+  auto b = fromLcm(near_msg);
+  ASSERT_TRUE(a && b);
+  EXPECT_LT(cv::countNonZero(b->depth), cv::countNonZero(a->depth) * 7 / 10);
+  std::vector<LevelCorners> corners;
+  detectPyramidCorners(buildPyramid(b->grey), CornerOptions{}, false, &corners);
+  long reads = 0, same = 0;
+  for (int level = 0; level < static_cast<int>(corners.size()); ++level) {
+    const int s = 1 << level;
+    for (const cv::Point2i& c : corners[level].all) {
+      for (int dv : {-s, 0, s}) {
+        for (int du : {-s, 0, s}) {
+          const int u = std::clamp((c.x * s) + s / 2 + du, 0, b->depth.cols - 1);
+          const int v = std::clamp((c.y * s) + s / 2 + dv, 0, b->depth.rows - 1);
+          if (a->depth.at<uint16_t>(v, u) == 0) continue;
+          ++reads;
+          same += a->depth.at<uint16_t>(v, u) == b->depth.at<uint16_t>(v, u) ? 1 : 0;
+        }
+      }
+    }
+  }
+  ASSERT_GT(reads, 1000);
+  EXPECT_GE(same, reads * 99 / 100) << same << " of " << reads;  // 7008 of 7050
 }
 
 TEST(LcmConversions, StatusRoundTrip) {

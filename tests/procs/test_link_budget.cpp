@@ -111,22 +111,31 @@ TEST(EncodingLadder, RungsFollowTheBucket) {
 
 TEST(EncodingLadder, StartsAtTheConfiguredEncodingAndEndsAtTheLowestQuality) {
   const auto ladder = encodingLadder(KeyframeEncoding{false, 90, 1}, 30);
-  ASSERT_EQ(ladder.size(), 8u);  // PNG full, PNG quarter depth, JPEG 90, 75, 60, 45, 30, then depth 8
+  // PNG full, PNG quarter depth, then depth near corners only, JPEG 90, 75, 60, 45, 30, then depth 8
+  ASSERT_EQ(ladder.size(), 9u);
   EXPECT_FALSE(ladder[0].jpeg_grey);
   EXPECT_EQ(ladder[0].depth_step, 1);
   EXPECT_EQ(ladder[1].depth_step, 4);
-  EXPECT_TRUE(ladder[2].jpeg_grey);
+  EXPECT_FALSE(ladder[1].depth_near_corners);
+  EXPECT_TRUE(ladder[2].depth_near_corners);
+  EXPECT_FALSE(ladder[2].jpeg_grey);
+  EXPECT_TRUE(ladder[3].jpeg_grey);
+  for (size_t i = 2; i < ladder.size(); ++i) EXPECT_TRUE(ladder[i].depth_near_corners) << i;
   EXPECT_EQ(ladder.back().jpeg_quality, 30);
   EXPECT_EQ(ladder.back().depth_step, 8);
   EXPECT_EQ(ladder[ladder.size() - 2].depth_step, 4);
   const auto from_default = encodingLadder(KeyframeEncoding{true, 75, 4}, 30);
-  ASSERT_EQ(from_default.size(), 5u);  // 75, 60, 45, 30, 30 with depth 8
-  EXPECT_EQ(from_default[1].jpeg_quality, 60);
-  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 4}, 30).size(), 2u);  // below the floor: depth 8 only
-  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 8}, 30).size(), 1u);  // nothing coarser
-  const auto high_floor = encodingLadder(KeyframeEncoding{false, 90, 4}, 95);  // PNG, JPEG 95, depth 8
-  ASSERT_EQ(high_floor.size(), 3u);
-  EXPECT_EQ(high_floor[1].jpeg_quality, 95);
+  ASSERT_EQ(from_default.size(), 6u);  // 75, 75 with depth near corners, 60, 45, 30, 30 with depth 8
+  EXPECT_EQ(from_default[1].jpeg_quality, 75);
+  EXPECT_TRUE(from_default[1].depth_near_corners);
+  EXPECT_EQ(from_default[2].jpeg_quality, 60);
+  EXPECT_EQ(encodingLadder(KeyframeEncoding{true, 20, 4}, 30).size(), 3u);  // below the floor: corners, depth 8
+  KeyframeEncoding coarsest{true, 20, 8};
+  coarsest.depth_near_corners = true;
+  EXPECT_EQ(encodingLadder(coarsest, 30).size(), 1u);  // nothing coarser
+  const auto high_floor = encodingLadder(KeyframeEncoding{false, 90, 4}, 95);  // PNG, corners, JPEG 95, depth 8
+  ASSERT_EQ(high_floor.size(), 4u);
+  EXPECT_EQ(high_floor[2].jpeg_quality, 95);
 }
 
 TEST(EncodingLadder, EachRungOfARenderedKeyframeIsSmallerAndDecodes) {

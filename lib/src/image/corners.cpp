@@ -255,6 +255,27 @@ void detectPyramidCorners(const ImagePyramid& pyramid, const CornerOptions& opti
   }
 }
 
+cv::Mat cornerBlockMask(const std::vector<LevelCorners>& corners, int step, cv::Size size) {
+  step = std::max(step, 1);
+  const int cols = (size.width + step - 1) / step, rows = (size.height + step - 1) / step;
+  cv::Mat mask(rows, cols, CV_8UC1, cv::Scalar(0));
+  if (cols == 0 || rows == 0) return mask;
+  for (size_t level = 0; level < corners.size(); ++level) {
+    const double scale = levelScale(static_cast<int>(level));
+    const double reach = scale + 1.0;  // [level-0 px]
+    for (const cv::Point2i& c : corners[level].all) {
+      // The corner's level-0 position (pyramid.h, zeroFromLevel) and the blocks it reaches.
+      const double u = (c.x + 0.5) * scale - 0.5, v = (c.y + 0.5) * scale - 0.5;
+      const int u0 = std::clamp(static_cast<int>(std::floor((u - reach) / step)), 0, cols - 1);
+      const int u1 = std::clamp(static_cast<int>(std::floor((u + reach) / step)), 0, cols - 1);
+      const int v0 = std::clamp(static_cast<int>(std::floor((v - reach) / step)), 0, rows - 1);
+      const int v1 = std::clamp(static_cast<int>(std::floor((v + reach) / step)), 0, rows - 1);
+      mask(cv::Range(v0, v1 + 1), cv::Range(u0, u1 + 1)).setTo(255);
+    }
+  }
+  return mask;
+}
+
 float shiTomasiScore(const cv::Mat& image, cv::Point2i p, int half_window) {
   assert(image.type() == CV_8UC1);
   const int reach = half_window + 1;  // window plus the central-difference margin [px]

@@ -70,6 +70,15 @@ void detectCorners(const cv::Mat& level_image, int threshold, int border, LevelC
 void detectPyramidCorners(const ImagePyramid& pyramid, const CornerOptions& options,
                           bool with_maxima, std::vector<LevelCorners>* out);
 
+// The step x step blocks of a level-0 image of 'size' (block (bu, bv) covers columns
+// bu * step .. bu * step + step - 1, rows likewise) holding a pixel within 2^level + 1 px
+// (in both axes) of a corner of 'corners' at its level-0 position: 255 there, 0 elsewhere;
+// ceil(width / step) x ceil(height / step), CV_8UC1. For the keyframe depth on the link:
+// the mapper reads depth only where it matches a patch, and it matches at FAST corners
+// (re-finding, epipolar search; the ORB keypoints of loop closure are FAST corners too), at
+// a position known to about a pixel of the corner's level, hence the margin.
+cv::Mat cornerBlockMask(const std::vector<LevelCorners>& corners, int step, cv::Size size);
+
 // FAST-10 score of pixel p (the largest threshold at which p is a corner; 0 or below if it
 // is not a corner at threshold 0) [grey levels]. p must be >= 3 px from the image edge.
 int fastScore(const cv::Mat& image, cv::Point2i p);
