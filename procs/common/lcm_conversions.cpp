@@ -320,18 +320,18 @@ cv::Mat subsampleDepth(const cv::Mat& depth, int step) {
 
 // 'depth' (at every step-th pixel and row of 'grey') with no reading (0) away from the
 // grey image's FAST corners (KeyframeEncoding::depth_near_corners). The mapper detects its
-// corners in the decoded JPEG, whose error (about 3 grey levels rms at quality 30-45: PSNR
-// 38-39 dB on corridor frames) lifts some weaker corners over the threshold, so the corners
-// here are taken kJpegCornerMargin grey levels below the thresholds. Measured on a corridor
-// frame at quality 45 (test_lcm_conversions): of the depth readings at the decoded image's
-// corners, 96 % kept at the thresholds themselves (2.6 of 6.6 kB), 99.4 % 4 below (3.8 kB).
-constexpr int kJpegCornerMargin = 4;  // [grey levels]
+// corners in the decoded JPEG, kLossyCornerMargin (4) below the thresholds (corners.h), and
+// the JPEG's error moves scores further, so the corners here are taken kDepthCornerMargin
+// below. Measured on a corridor frame at quality 45 (test_lcm_conversions), the share of
+// the depth readings at the mapper's corners that stay, and the depth's bytes: margin 4,
+// 94.6 % (3.8 of 6.6 kB); 6, 99.3 % (4.1 kB); 8, more bytes than the whole depth (9.3 kB:
+// FAST at 2 grey levels finds the noise, and the holes between break the prediction).
+constexpr int kDepthCornerMargin = 6;  // [grey levels]
 
 cv::Mat depthNearCorners(const cv::Mat& depth, const cv::Mat& grey, int step) {
-  CornerOptions options;
-  for (int& threshold : options.fast_thresholds) threshold = std::max(1, threshold - kJpegCornerMargin);
   std::vector<LevelCorners> corners;
-  detectPyramidCorners(buildPyramid(grey), options, /*with_maxima=*/false, &corners);
+  detectPyramidCorners(buildPyramid(grey), lossyCornerOptions(CornerOptions{}, kDepthCornerMargin),
+                       /*with_maxima=*/false, &corners);
   const cv::Mat mask = cornerBlockMask(corners, step, grey.size());
   cv::Mat out = depth.clone();
   if (mask.size() == out.size()) out.setTo(0, mask == 0);
@@ -354,15 +354,22 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   using K = rgbdslam::keyframe_t;
   const bool inverse = encoding.inverse_depth_step > 0 && keyframe.depth_scale > 0;
   const int step = encoding.depth_step >= 8 ? 8 : encoding.depth_step >= 4 ? 4 : encoding.depth_step >= 2 ? 2 : 1;
-  cv::Mat depth = step == 1 || keyframe.depth.empty() ? keyframe.depth : subsampleDepth(keyframe.depth, step);
-  if (encoding.depth_near_corners && !depth.empty() && !keyframe.grey.empty()) depth = depthNearCorners(depth, keyframe.grey, step);
-  if (inverse && !depth.empty()) {
-    msg.depth_format = step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF
-                       : step == 4 ? K::DEPTH_INVERSE_ZSTD_QUARTER : K::DEPTH_INVERSE_ZSTD_EIGHTH;
-    msg.depth = compressInverseDepth(depth, keyframe.depth_scale, encoding.inverse_depth_step);
-  } else if (step > 1 && !depth.empty()) {
-    msg.depth_format = step == 2 ? K::DEPTH_ZLIB_U16_HALF : step == 4 ? K::DEPTH_ZLIB_U16_QUARTER : K::DEPTH_ZLIB_U16_EIGHTH;
-    msg.depth = compressDepth(depth, 6);
+  const cv::Mat depth = step == 1 || keyframe.depth.empty() ? keyframe.depth : subsampleDepth(keyframe.depth, step);
+  const auto compress = [&](const cv::Mat& d) {
+    return inverse ? compressInverseDepth(d, keyframe.depth_scale, encoding.inverse_depth_step) : compressDepth(d, 6);
+  };
+  if (!depth.empty() && (inverse || step > 1)) {
+    msg.depth_format = inverse ? (step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF
+                                  : step == 4 ? K::DEPTH_INVERSE_ZSTD_QUARTER : K::DEPTH_INVERSE_ZSTD_EIGHTH)
+                               : (step == 2 ? K::DEPTH_ZLIB_U16_HALF : step == 4 ? K::DEPTH_ZLIB_U16_QUARTER
+                                  : K::DEPTH_ZLIB_U16_EIGHTH);
+    msg.depth = compress(depth);
+    // Where corners are everywhere (a richly textured view) the mask keeps nearly all of
+    // the depth, and its holes cost the predictor more than they save: the whole goes then.
+    if (encoding.depth_near_corners && !keyframe.grey.empty()) {
+      std::vector<uint8_t> near = compress(depthNearCorners(depth, keyframe.grey, step));
+      if (near.size() < msg.depth.size()) msg.depth = std::move(near);
+    }
   } else {
     encodeDepth(depth, true, 1, &msg.depth_format, &msg.depth);
   }
@@ -407,6 +414,7 @@ Status decodeGrey(const rgbdslam::keyframe_t& msg, KeyframeData* keyframe) {
     auto grey = decodeImage(msg.grey.data(), msg.grey.size(), 1, msg.width, msg.height);
     if (!grey) return Error{"grey: " + grey.error()};
     keyframe->grey = *grey;
+    keyframe->grey_lossy = msg.grey_format == rgbdslam::keyframe_t::GREY_JPEG;
   } else {
     return Error{"unknown grey format " + std::to_string(msg.grey_format)};
   }

@@ -248,5 +248,14 @@ TEST(Corners, BlockMaskCoversEachCornerWithAPixelOfItsLevel) {
   EXPECT_EQ(cv::countNonZero(edge), 1);
 }
 
+TEST(Corners, LossyCornerOptionsLowerEveryThresholdToOneAtLeast) {
+  CornerOptions options;
+  options.fast_thresholds = {10, 15, 3, 10};
+  const CornerOptions lossy = lossyCornerOptions(options);
+  EXPECT_EQ(lossy.fast_thresholds, (std::array<int, kMaxLevels>{6, 11, 1, 6}));
+  EXPECT_EQ(lossyCornerOptions(options, 9).fast_thresholds, (std::array<int, kMaxLevels>{1, 6, 1, 1}));
+  EXPECT_EQ(lossy.border, options.border);
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -138,7 +138,7 @@ TEST(EncodingLadder, StartsAtTheConfiguredEncodingAndEndsAtTheLowestQuality) {
   EXPECT_EQ(high_floor[2].jpeg_quality, 95);
 }
 
-TEST(EncodingLadder, EachRungOfARenderedKeyframeIsSmallerAndDecodes) {
+TEST(EncodingLadder, EachRungOfARenderedKeyframeIsNoLargerAndDecodes) {
   const SyntheticScene scene(*parseSyntheticSpec("room,frames=2"));
   const RgbdFrame frame = scene.render(0);
   KeyframeData keyframe;
@@ -148,9 +148,17 @@ TEST(EncodingLadder, EachRungOfARenderedKeyframeIsSmallerAndDecodes) {
   keyframe.depth = frame.depth;
   keyframe.depth_scale = frame.depth_scale;
   size_t previous = SIZE_MAX, first = 0;
+  bool near_corners = false;
   for (const KeyframeEncoding& rung : encodingLadder(KeyframeEncoding{true, 75, 2}, 30)) {
     const auto bytes = test::encode(toLcm(keyframe, rung));
-    EXPECT_LT(bytes.size(), previous) << "quality " << rung.jpeg_quality << ", depth step " << rung.depth_step;
+    if (rung.depth_near_corners && !near_corners) {
+      // The room is textured all over: the mask keeps nearly everything, and the whole
+      // depth goes when it is no larger (the corridor's plain walls: test_lcm_conversions).
+      EXPECT_LE(bytes.size(), previous);
+      near_corners = true;
+    } else {
+      EXPECT_LT(bytes.size(), previous) << "quality " << rung.jpeg_quality << ", depth step " << rung.depth_step;
+    }
     if (first == 0) first = bytes.size();
     previous = bytes.size();
     auto msg = decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size());

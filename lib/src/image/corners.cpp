@@ -255,6 +255,11 @@ void detectPyramidCorners(const ImagePyramid& pyramid, const CornerOptions& opti
   }
 }
 
+CornerOptions lossyCornerOptions(CornerOptions options, int margin) {
+  for (int& threshold : options.fast_thresholds) threshold = std::max(1, threshold - margin);
+  return options;
+}
+
 cv::Mat cornerBlockMask(const std::vector<LevelCorners>& corners, int step, cv::Size size) {
   step = std::max(step, 1);
   const int cols = (size.width + step - 1) / step, rows = (size.height + step - 1) / step;

@@ -172,7 +172,9 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   KeyframeData bare;  // the image content only; points and measurements are added checked
   bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = data.T_w_c;
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
-  Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, options_.keyframe_build));
+  KeyframeBuildOptions build = options_.keyframe_build;
+  if (data.grey_lossy) build.corners = lossyCornerOptions(build.corners);
+  Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, build));
   for (const MapPointData& p : data.new_points) addPoint(MapPoint(p));
   for (const Measurement& m : data.measurements) {
     if (map_.point(m.point_id)) addMeasurement(kf->id, m);

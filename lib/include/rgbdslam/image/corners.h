@@ -70,6 +70,15 @@ void detectCorners(const cv::Mat& level_image, int threshold, int border, LevelC
 void detectPyramidCorners(const ImagePyramid& pyramid, const CornerOptions& options,
                           bool with_maxima, std::vector<LevelCorners>* out);
 
+// How far a lossy codec's error (JPEG at quality 30-45: about 3 grey levels rms, PSNR 38-39
+// dB on corridor frames) can move a FAST score: corners of an image to be sent lossy, and of
+// one received so, are taken this far below the thresholds, so that a corner of the
+// original is still found in the decoded image (the mapper's re-finding and epipolar search
+// match only at corners; session 19, docs/open_work.md).
+constexpr int kLossyCornerMargin = 4;  // [grey levels]
+// options.fast_thresholds lowered by 'margin' (to 1 at least) [grey levels].
+CornerOptions lossyCornerOptions(CornerOptions options, int margin = kLossyCornerMargin);
+
 // The step x step blocks of a level-0 image of 'size' (block (bu, bv) covers columns
 // bu * step .. bu * step + step - 1, rows likewise) holding a pixel within 2^level + 1 px
 // (in both axes) of a corner of 'corners' at its level-0 position: 255 there, 0 elsewhere;

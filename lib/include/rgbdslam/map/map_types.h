@@ -36,6 +36,7 @@ struct KeyframeData {
   double depth_scale = 5000.0;  // raw units per metre
   std::vector<Measurement> measurements;
   std::vector<MapPointData> new_points;
+  bool grey_lossy = false;  // 'grey' went through a lossy codec (JPEG on the link)
 };
 
 struct KeyframePose {
