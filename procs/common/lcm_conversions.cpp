@@ -356,13 +356,14 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   const int step = encoding.depth_step >= 8 ? 8 : encoding.depth_step >= 4 ? 4 : encoding.depth_step >= 2 ? 2 : 1;
   const cv::Mat depth = step == 1 || keyframe.depth.empty() ? keyframe.depth : subsampleDepth(keyframe.depth, step);
   const auto compress = [&](const cv::Mat& d) {
-    return inverse ? compressInverseDepth(d, keyframe.depth_scale, encoding.inverse_depth_step) : compressDepth(d, 6);
+    return inverse ? compressInverseDepth(d, keyframe.depth_scale, encoding.inverse_depth_step)
+                   : compressDepth(d, step == 1 ? 1 : 6);
   };
-  if (!depth.empty() && (inverse || step > 1)) {
+  if (!depth.empty()) {
     msg.depth_format = inverse ? (step == 1 ? K::DEPTH_INVERSE_ZSTD : step == 2 ? K::DEPTH_INVERSE_ZSTD_HALF
                                   : step == 4 ? K::DEPTH_INVERSE_ZSTD_QUARTER : K::DEPTH_INVERSE_ZSTD_EIGHTH)
-                               : (step == 2 ? K::DEPTH_ZLIB_U16_HALF : step == 4 ? K::DEPTH_ZLIB_U16_QUARTER
-                                  : K::DEPTH_ZLIB_U16_EIGHTH);
+                               : (step == 1 ? K::DEPTH_ZLIB_U16 : step == 2 ? K::DEPTH_ZLIB_U16_HALF
+                                  : step == 4 ? K::DEPTH_ZLIB_U16_QUARTER : K::DEPTH_ZLIB_U16_EIGHTH);
     msg.depth = compress(depth);
     // Where corners are everywhere (a richly textured view) the mask keeps nearly all of
     // the depth, and its holes cost the predictor more than they save: the whole goes then.
@@ -371,7 +372,7 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
       if (near.size() < msg.depth.size()) msg.depth = std::move(near);
     }
   } else {
-    encodeDepth(depth, true, 1, &msg.depth_format, &msg.depth);
+    encodeDepth(depth, true, 1, &msg.depth_format, &msg.depth);  // DEPTH_NONE
   }
   msg.depth_size = static_cast<int32_t>(msg.depth.size());
   msg.depth_scale = static_cast<float>(keyframe.depth_scale);
