@@ -130,6 +130,25 @@ TEST_F(LocalMap, AStoreHoldsTheColdKeyframesImages) {
   replica->setStore(nullptr);  // the store goes before the fixture's replica
 }
 
+// A keyframe that leaves the wanted list stays hot while the hot set is within the window,
+// so one that comes back a frame later is not frozen and thawed again (JPEG each time); over
+// the window the oldest goes first.
+TEST_F(LocalMap, KeyframesNotWantedStayHotWithinTheWindow) {
+  LocalMapChange change = replica->updateLocalMap({0}, 2, 10, 90, 3);
+  EXPECT_EQ(change.frozen, 0);
+  EXPECT_EQ(replica->hotKeyframes(), 3);
+  change = replica->updateLocalMap({2}, 2, 10, 90, 2);
+  EXPECT_EQ(change.frozen, 1);
+  EXPECT_TRUE(keyframe(0).cold()) << "the oldest not wanted";
+  EXPECT_FALSE(keyframe(1).cold());
+  EXPECT_FALSE(keyframe(2).cold());
+  change = replica->updateLocalMap({0}, 2, 10, 90, 2);
+  EXPECT_EQ(change.thawed, 1);
+  EXPECT_EQ(change.frozen, 1) << "thawing one over the window freezes one";
+  EXPECT_EQ(replica->hotKeyframes(), 2);
+  EXPECT_FALSE(keyframe(0).cold());
+}
+
 TEST_F(LocalMap, FreezingIsBoundedPerCall) {
   const LocalMapChange change = replica->updateLocalMap({}, 2, 1, 90);
   EXPECT_EQ(change.frozen, 1);

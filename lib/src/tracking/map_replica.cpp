@@ -23,7 +23,7 @@ void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
 }
 
 LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
-                                          int max_freezes, int jpeg_quality) {
+                                          int max_freezes, int jpeg_quality, int max_hot) {
   LocalMapChange change;
   for (KeyframeId id : wanted) {
     Keyframe* keyframe = map_.keyframe(id);
@@ -38,9 +38,13 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
   // At least as many frozen as thawed: a lost tracker thaws around every relocalisation
   // candidate (8 each, several candidates a frame), and with only max_freezes going back the
   // hot set grew to 117 of a window of 40 on the flight (+35 MB of pyramids).
-  const int freezes = max_freezes + change.thawed;
+  // Hot keyframes not wanted stay while the hot set is within max_hot: a keyframe that
+  // leaves the wanted list for a frame or two and comes back is not frozen and thawed again
+  // (each thaw rebuilds its pyramid from the JPEG, so its points' patches lose a little).
+  const int freezes = std::min(max_freezes + change.thawed, hotKeyframes() - max_hot);
+  if (freezes <= 0) return change;
   const std::unordered_set<KeyframeId> keep(wanted.begin(), wanted.end());
-  for (const auto& [id, keyframe] : map_.keyframes()) {
+  for (const auto& [id, keyframe] : map_.keyframes()) {  // oldest first
     if (keyframe->cold() || keep.count(id)) continue;
     freeze(keyframe.get(), jpeg_quality);
     if (++change.frozen >= freezes) break;

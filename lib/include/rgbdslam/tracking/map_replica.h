@@ -40,9 +40,10 @@ namespace rgbdslam {
 
 // The local map: how many keyframes stay hot, and how much work one frame may do on it.
 struct LocalMapOptions {
-  // Hot keyframes: the sources of the points in view, then the nearest to the camera (0: all
-  // stay hot). 40 (16 MB of pyramids at 640x480) since keyframe culling leaves 1.2-1.7 per
-  // metre, so 40 span 25-35 m of a corridor; measured against 80 (2026-11-25): full corridor
+  // Hot keyframes, at most this many: the sources of the points in view (most points first),
+  // then the nearest to the camera (0: all stay hot). 40 (16 MB of pyramids at 640x480)
+  // since keyframe culling leaves 1.2-1.7 per metre, so 40 span 25-35 m of a corridor;
+  // measured against 80 (2026-11-25): full corridor
   // --deterministic 20.7 mm (33.1), through the suite tracker peak 109 MB (126), ATE 36.2 mm
   // (35.8), every frame posed; the room, teddy, office and the first 720 frames of the
   // flight keep fewer keyframes than that and are unchanged.
@@ -79,9 +80,10 @@ class MapReplica {
   bool apply(const MapUpdate& update);
   void clear();
   // Thaws the cold keyframes of 'wanted' (nearest first; at most max_thaws) and freezes hot
-  // keyframes not in it (at most max_freezes plus as many as were thawed).
+  // keyframes not in it, oldest first, while more than max_hot are hot (at most max_freezes
+  // plus as many as were thawed; max_hot 0: every hot keyframe not wanted goes).
   LocalMapChange updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
-                                int max_freezes, int jpeg_quality);
+                                int max_freezes, int jpeg_quality, int max_hot = 0);
   int hotKeyframes() const;
 
   const Map& map() const { return map_; }
