@@ -66,6 +66,11 @@ void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
     std::vector<uint8_t>().swap(keyframe->cold_grey);
   }
   ImagePyramid().levels.swap(keyframe->pyramid.levels);
+  for (PointSlot& slot : slots_) {
+    if (slot.source != keyframe) continue;
+    slot.patch_cache.reset();  // made from the pyramid just freed; thawing makes it anew
+    slot.patch_level = -1;
+  }
 }
 
 bool MapReplica::thaw(Keyframe* keyframe) {
@@ -115,7 +120,7 @@ void MapReplica::addSlot(MapPoint* point) {
   PointSlot slot;
   if (!initSlot(map_, camera_, point, &slot)) return;
   slot_index_[point->id] = slots_.size();
-  slots_.push_back(slot);
+  slots_.push_back(std::move(slot));
 }
 
 void MapReplica::removeSlot(PointId id) {
@@ -124,7 +129,7 @@ void MapReplica::removeSlot(PointId id) {
   const size_t index = it->second;
   slot_index_.erase(it);
   if (index + 1 != slots_.size()) {
-    slots_[index] = slots_.back();
+    slots_[index] = std::move(slots_.back());
     slot_index_[slots_[index].point->id] = index;
   }
   slots_.pop_back();

@@ -34,9 +34,9 @@ PhotometricIntegrity checkPhotometricIntegrity(const std::vector<PointSlot*>& sl
     if (slot->patch_level != level || level < 0 || level >= pyramid.numLevels()) continue;
     const auto uv = camera.project(T_c_w * slot->point->p_w);
     if (!uv) continue;
-    const int score = zmssdAtSubpixel(slot->patch, pyramid.levels[static_cast<size_t>(level)], levelFromZero(*uv, level));
+    const int score = zmssdAtSubpixel(slot->patch(), pyramid.levels[static_cast<size_t>(level)], levelFromZero(*uv, level));
     if (score < 0) continue;
-    const double accepted = patchAcceptance(slot->patch, search);
+    const double accepted = patchAcceptance(slot->patch(), search);
     ++out.checked;
     if (score >= accepted) ++out.mismatched;
   }

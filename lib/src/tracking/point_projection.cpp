@@ -71,19 +71,20 @@ bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
 }
 
 bool ensurePatch(PointSlot* slot, double tolerance) {
-  if (slot->patch_level == slot->search_level &&
-      (slot->A_cur_src - slot->patch_A).cwiseAbs().maxCoeff() <= tolerance) {
+  if (slot->patch_level == slot->search_level && slot->patch_cache &&
+      (slot->A_cur_src - slot->patch_cache->A).cwiseAbs().maxCoeff() <= tolerance) {
     return true;
   }
   const MapPoint& point = *slot->point;
   const int source_level = point.source_level;
   if (source_level >= slot->source->pyramid.numLevels()) return false;
+  if (!slot->patch_cache) slot->patch_cache = std::make_unique<PointSlot::PatchCache>();
   if (!warpPatch(slot->source->pyramid.levels[source_level], source_level, point.source_uv,
-                 slot->A_cur_src, slot->search_level, &slot->patch)) {
+                 slot->A_cur_src, slot->search_level, &slot->patch_cache->patch)) {
     slot->patch_level = -1;
     return false;
   }
-  slot->patch_A = slot->A_cur_src;
+  slot->patch_cache->A = slot->A_cur_src;
   slot->patch_level = slot->search_level;
   return true;
 }
@@ -164,15 +165,16 @@ int searchPoints(const std::vector<PointSlot*>& slots, const ImagePyramid& pyram
     slot->searched = true;
     const Eigen::Vector2d predicted_level = levelFromZero(slot->uv, level);
     const cv::Mat& image = pyramid.levels[level];
-    const int max_zmssd = patchAcceptance(slot->patch, options);
-    auto match = searchPatch(slot->patch, image, corners[level], predicted_level,
+    const Patch& patch = slot->patch();
+    const int max_zmssd = patchAcceptance(patch, options);
+    auto match = searchPatch(patch, image, corners[level], predicted_level,
                              radius_px, max_zmssd);
     if (!match && options.dense_fallback) {
-      match = searchDense(slot->patch, image, predicted_level, radius_px, max_zmssd);
+      match = searchDense(patch, image, predicted_level, radius_px, max_zmssd);
     }
     if (!match) continue;
     Eigen::Vector2d position(match->x, match->y);
-    if (!refineSubpixel(slot->patch, image, &position, options.subpixel)) continue;
+    if (!refineSubpixel(patch, image, &position, options.subpixel)) continue;
     slot->found = true;
     slot->found_uv = zeroFromLevel(position, level);
     slot->found_level = level;

@@ -13,6 +13,7 @@
 // *_level; A_cur_src maps a level-0 pixel offset in the source keyframe to a level-0 pixel
 // offset in the current image (patch.h).
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
@@ -42,10 +43,17 @@ struct PointSlot {
   // d(normalised coordinates)/d(pixel) at the point's source pixel: the unprojection
   // Jacobian of the source camera (1/f on the diagonal without distortion).
   Eigen::Matrix2d d_m_d_uvsrc = Eigen::Matrix2d::Identity();
-  // Patch cache: the warped patch, the warp and level it was made for (level -1: none).
-  Patch patch;
-  Eigen::Matrix2d patch_A = Eigen::Matrix2d::Zero();
+  // Patch cache: the warped patch and the warp it was made for, and its level (-1: none).
+  // Out of line, made at the slot's first search and freed when the source keyframe goes
+  // cold (MapReplica): most slots of a long flight's map are of cold keyframes, and their
+  // sweeps each frame (projectAll) read half the bytes without it in the slot.
+  struct PatchCache {
+    Patch patch;
+    Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
+  };
+  std::unique_ptr<PatchCache> patch_cache;
   int patch_level = -1;
+  const Patch& patch() const { return patch_cache->patch; }  // patch_level >= 0
   // Per frame, from projectPoint().
   bool waits_for_source = false;  // in the image, but its source keyframe is cold
   Vec3 p_c = Vec3::Zero();
