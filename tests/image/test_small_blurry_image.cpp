@@ -66,6 +66,23 @@ TEST(SmallBlurryImage, IsSixteenthSizeBlurredAndZeroMean) {
   EXPECT_EQ(cv::norm(shallow.image, sbi.image, cv::NORM_INF), 0.0);
 }
 
+// A keyframe keeps its SBI compact (its image only); restored, it is the SBI made.
+TEST(SmallBlurryImage, ACompactSbiRestoresExactly) {
+  const SmallBlurryImage made = sbiOf(coarseTexture(7));
+  SmallBlurryImage sbi = made;
+  sbi.grad_x = made.grad_x.clone(), sbi.grad_y = made.grad_y.clone(), sbi.support = made.support.clone();
+  compactSmallBlurryImage(&sbi);
+  EXPECT_FALSE(sbi.complete());
+  EXPECT_TRUE(sbi.grad_x.empty() && sbi.grad_y.empty() && sbi.support.empty());
+  restoreSmallBlurryImage(&sbi);
+  ASSERT_TRUE(sbi.complete());
+  for (const auto& [restored, original] : {std::pair{sbi.grad_x, made.grad_x}, {sbi.grad_y, made.grad_y},
+                                          {sbi.support, made.support}}) {
+    ASSERT_EQ(restored.size(), original.size());
+    EXPECT_EQ(cv::norm(restored, original, cv::NORM_INF), 0.0);
+  }
+}
+
 TEST(SmallBlurryImage, ZmssdComparesStructureNotBrightness) {
   const cv::Mat grey = coarseTexture(2);
   const SmallBlurryImage a = sbiOf(grey);

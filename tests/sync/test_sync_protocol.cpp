@@ -126,7 +126,7 @@ struct Rig {
       NewPoint np;
       np.point = MapPoint(kf.new_points[i]);
       np.measurement = kf.measurements[i];
-      replica.addProvisionalPoint(k, np);
+      replica.addProvisionalPoint(np);
     }
     up.send(kf, now);
     tracker.send(k, kf, now);

@@ -29,7 +29,7 @@ class LocalMap : public ::testing::Test {
       point.point = MapPoint(MapPointData{100 + id, Vec3(static_cast<double>(id), 0, 2), id,
                                           Eigen::Vector2d(320, 240), 0});
       point.measurement = Measurement{100 + id, Eigen::Vector2d(320, 240), 0, 2.0};
-      replica->addProvisionalPoint(id, point);
+      replica->addProvisionalPoint(point);
     }
   }
   const Keyframe& keyframe(KeyframeId id) const { return *replica->map().keyframe(id); }
@@ -178,7 +178,7 @@ TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
   acked.version = 1;
   acked.acked_below = 3;
   ASSERT_TRUE(replica->apply(acked));
-  replica->addProvisionalPoint(2, NewPoint{MapPoint(MapPointData{300, Vec3(1, 0, 2), 1, {300, 200}, 0}),
+  replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{300, Vec3(1, 0, 2), 1, {300, 200}, 0}),
                                            Measurement{300, {300, 200}, 0, 2.0}});  // the mapper never had it
   MapUpdate delta;
   delta.version = 2;

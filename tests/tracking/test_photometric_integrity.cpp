@@ -37,7 +37,7 @@ class PhotometricCheck : public ::testing::Test {
       NewPoint point;
       point.point = MapPoint(MapPointData{id, p_w, 0, pixels[i], 0});
       point.measurement = Measurement{id, pixels[i], 0, raw / key_frame.depth_scale};
-      replica->addProvisionalPoint(0, point);
+      replica->addProvisionalPoint(point);
       ++id;
     }
     // Frame 10, searched from its true pose as the tracker's fine stage does.

@@ -123,20 +123,38 @@ void kernelSupport(const cv::Mat& kernel, int n, std::vector<float>* support) {
 // Gaussian blur by normalised convolution: zero padding, divided by the blurred mask of
 // valid pixels (written to *support; separable, so it is the product of 1-D sums).
 // Replicated or mirrored borders would invent structure fixed to the image frame.
-void blurNormalised(cv::Mat* image, cv::Mat* support) {
+cv::Mat blurKernel() {
   const int ksize = 2 * static_cast<int>(std::ceil(kBlurHalfWidthSigmas * kSbiBlurSigma)) + 1;
-  const cv::Mat kernel = cv::getGaussianKernel(ksize, kSbiBlurSigma, CV_32F);
+  return cv::getGaussianKernel(ksize, kSbiBlurSigma, CV_32F);
+}
+
+// The blurred mask of valid pixels of an image of this size (separable: the product of
+// 1-D sums).
+void blurSupport(const cv::Mat& kernel, cv::Size size, cv::Mat* support) {
+  std::vector<float> support_x, support_y;
+  kernelSupport(kernel, size.width, &support_x);
+  kernelSupport(kernel, size.height, &support_y);
+  support->create(size, CV_32FC1);
+  for (int y = 0; y < size.height; ++y) {
+    float* weight = support->ptr<float>(y);
+    for (int x = 0; x < size.width; ++x) weight[x] = support_y[y] * support_x[x];
+  }
+}
+
+void gradients(SmallBlurryImage* sbi) {
+  cv::Sobel(sbi->image, sbi->grad_x, CV_32F, 1, 0, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(sbi->image, sbi->grad_y, CV_32F, 0, 1, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
+}
+
+void blurNormalised(cv::Mat* image, cv::Mat* support) {
+  const cv::Mat kernel = blurKernel();
   cv::sepFilter2D(*image, *image, CV_32F, kernel, kernel, cv::Point(-1, -1), 0,
                   cv::BORDER_CONSTANT);
-  std::vector<float> support_x, support_y;
-  kernelSupport(kernel, image->cols, &support_x);
-  kernelSupport(kernel, image->rows, &support_y);
-  support->create(image->size(), CV_32FC1);
+  blurSupport(kernel, image->size(), support);
   for (int y = 0; y < image->rows; ++y) {
     float* value = image->ptr<float>(y);
-    float* weight = support->ptr<float>(y);
+    const float* weight = support->ptr<float>(y);
     for (int x = 0; x < image->cols; ++x) {
-      weight[x] = support_y[y] * support_x[x];
       value[x] /= weight[x];
     }
   }
@@ -155,9 +173,20 @@ void makeSmallBlurryImage(const ImagePyramid& pyramid, SmallBlurryImage* out) {
   small.convertTo(out->image, CV_32F);
   blurNormalised(&out->image, &out->support);
   out->image -= cv::mean(out->image)[0];
-  cv::Sobel(out->image, out->grad_x, CV_32F, 1, 0, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
-  cv::Sobel(out->image, out->grad_y, CV_32F, 0, 1, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
+  gradients(out);
   out->scale = 1.0 / (1 << kSbiLevel);
+}
+
+void compactSmallBlurryImage(SmallBlurryImage* sbi) {
+  sbi->grad_x.release();
+  sbi->grad_y.release();
+  sbi->support.release();
+}
+
+void restoreSmallBlurryImage(SmallBlurryImage* sbi) {
+  if (sbi->complete() || sbi->image.empty()) return;
+  blurSupport(blurKernel(), sbi->image.size(), &sbi->support);
+  gradients(sbi);
 }
 
 SmallBlurryImage makeSmallBlurryImage(const ImagePyramid& pyramid) {

@@ -25,6 +25,7 @@ std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
 void Keyframe::releaseMappingData() {
   depth.release();
   std::vector<LevelCorners>().swap(corners);
+  std::unordered_map<PointId, Measurement>().swap(measurements_);
 }
 
 cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m) {

@@ -90,14 +90,16 @@ bool MapReplica::thaw(Keyframe* keyframe) {
   return true;
 }
 
-void MapReplica::addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& point) {
-  addSlot(map_.addPoint(point.point));
-  map_.addMeasurement(keyframe_id, point.measurement);
+Keyframe* MapReplica::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
+  compactSmallBlurryImage(&keyframe->sbi);
+  return map_.addKeyframe(std::move(keyframe));
 }
+
+void MapReplica::addProvisionalPoint(const NewPoint& point) { addSlot(map_.addPoint(point.point)); }
 
 Keyframe* MapReplica::addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe) {
   acked_below_ = std::max(acked_below_, keyframe->id + 1);
-  return map_.addKeyframe(std::move(keyframe));
+  return addKeyframe(std::move(keyframe));
 }
 
 void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(map_.addPoint(point)); }

@@ -12,10 +12,17 @@ std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
   std::vector<RelocalisationCandidate> candidates;
   const auto consider = [&](KeyframeId id, const Keyframe& keyframe) {
     if (keyframe.sbi.image.size() != sbi.image.size()) return;
+    SmallBlurryImage restored;  // the replica keeps its keyframes' SBIs compact (map_replica.h)
+    if (!keyframe.sbi.complete()) {
+      restored.image = keyframe.sbi.image;  // shared, not copied
+      restored.scale = keyframe.sbi.scale;
+      restoreSmallBlurryImage(&restored);
+    }
+    const SmallBlurryImage& from = keyframe.sbi.complete() ? keyframe.sbi : restored;
     // Rank by the error left after the SE(2) alignment: the plain ZMSSD of two views a few
     // degrees apart is dominated by the shift and ranks unrelated views alike.
     double error = 0.0;
-    const Se2 se2 = alignSmallBlurryImages(keyframe.sbi, sbi, kSbiAlignIterations, &error);
+    const Se2 se2 = alignSmallBlurryImages(from, sbi, kSbiAlignIterations, &error);
     candidates.push_back({id, error, keyframe.T_w_c * rotationFromSe2(se2, camera, sbi.scale)});
   };
   if (among) {

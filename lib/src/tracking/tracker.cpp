@@ -603,10 +603,11 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
     return result;
   }
   rememberKeyframe(*keyframe);
+  keyframe->releaseMappingData();
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (!isProvisionalPointOf(np.point.id, 0)) break;
-    replica_.addProvisionalPoint(0, np);
+    replica_.addProvisionalPoint(np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
   }
@@ -1444,7 +1445,7 @@ KeyframeData Tracker::Impl::addKeyframe(PendingKeyframe pending) {
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
     if (!isProvisionalPointOf(np.point.id, data.id)) break;
-    replica_.addProvisionalPoint(data.id, np);
+    replica_.addProvisionalPoint(np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
   }

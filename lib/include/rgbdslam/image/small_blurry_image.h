@@ -36,6 +36,8 @@ struct SmallBlurryImage {
   // about 0.5 on the edges. The alignment trusts pixels by it.
   cv::Mat support;
   double scale = 1.0 / (1 << kSbiLevel);  // SBI px per level-0 px
+  // False after compactSmallBlurryImage: only 'image' is held.
+  bool complete() const { return !grad_x.empty(); }
 };
 
 // Built from the coarsest pyramid level (halved until it is at level kSbiLevel). The
@@ -43,6 +45,13 @@ struct SmallBlurryImage {
 SmallBlurryImage makeSmallBlurryImage(const ImagePyramid& pyramid);
 // The same into an existing SBI, reusing its buffers when the size is unchanged.
 void makeSmallBlurryImage(const ImagePyramid& pyramid, SmallBlurryImage* out);
+
+// Keeps only 'image' (a quarter of the memory: a keyframe holds its SBI for relocalisation
+// as long as it is in the map, and the gradients and support follow from the image).
+void compactSmallBlurryImage(SmallBlurryImage* sbi);
+// Puts back what compactSmallBlurryImage dropped, exactly as makeSmallBlurryImage made it
+// (a no-op on a complete SBI). alignSmallBlurryImages needs complete SBIs; zmssd does not.
+void restoreSmallBlurryImage(SmallBlurryImage* sbi);
 
 // Zero-mean SSD of two SBIs of the same size: sum over pixels of
 // ((a - mean a) - (b - mean b))^2 [grey levels^2]. Smaller is more similar.

@@ -47,8 +47,9 @@ struct Keyframe {
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }
   // Frees what only the mapper reads after the keyframe's points are made (the metric depth,
-  // 4 bytes a pixel, and the corners): the tracker's replica keeps the pyramid (the points'
-  // patches) and the small blurry image (relocalisation).
+  // 4 bytes a pixel, the corners and the measurements): the tracker's replica keeps the
+  // pyramid (the points' patches) and the small blurry image (relocalisation). Call it
+  // before the keyframe joins a Map (the Map indexes the measurements when it is added).
   void releaseMappingData();
   // Depth [m] at a level-0 pixel (nearest pixel); nullopt when there is no valid reading.
   std::optional<double> depthAt(const Eigen::Vector2d& uv) const;

@@ -18,9 +18,11 @@
 //   once), the pyramid freed, and their points are not searched (makeKeyframeViews marks
 //   them invalid) until the camera comes back and the keyframe is thawed (JPEG decoded,
 //   pyramid rebuilt, its points' patch caches dropped).
-// Memory: every keyframe's small blurry image and pose, every point's slot, the pyramids of
-// the hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth
-// and corners once its points are made) and the JPEG of the cold ones (30-60 kB at quality
+// Memory: every keyframe's pose and small blurry image (compact: its image only, 4.8 kB at
+// 640x480; the relocaliser restores the gradients and support it aligns with), every
+// point and its slot (no measurements: Keyframe::releaseMappingData), the pyramids of the
+// hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth,
+// corners and measurements once its points are made) and the JPEG of the cold ones (30-60 kB at quality
 // 90 on textured 640x480 images), unless a keyframe store (keyframe_store.h) holds those:
 // then a keyframe's JPEG is written there when it first goes cold and read back to thaw it.
 // Threads: not thread-safe; the tracker's thread owns it.
@@ -69,9 +71,11 @@ class MapReplica {
   // nullptr: they stay in memory). Set before the first keyframe.
   void setStore(KeyframeStore* store) { store_ = store; }
 
-  Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe) { return map_.addKeyframe(std::move(keyframe)); }
-  // A point from depth created in keyframe 'keyframe_id' and its measurement there.
-  void addProvisionalPoint(KeyframeId keyframe_id, const NewPoint& point);
+  Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe);
+  // A point from depth created in its source keyframe. Its measurement there is not kept:
+  // the replica holds no measurements (Keyframe::releaseMappingData), since the tracker
+  // reads none once a keyframe's points are made (they go to the mapper in KeyframeData).
+  void addProvisionalPoint(const NewPoint& point);
   // A keyframe and a point of a loaded map (map_file.h): the mapper holds them already, so
   // the keyframe counts as acknowledged. Keyframes first (a point's slot needs its source).
   Keyframe* addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe);
