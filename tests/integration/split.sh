@@ -13,6 +13,10 @@
 # SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS to the link and SLAM_MAP|MAPPER_STATUS back, each after the delay.
 SPLIT_MAP_ID=77  # fixed, so the tests can address the map
 SPLIT_TRACKER_ARGS=()  # more rgbd-tracker arguments for the next split_start
+# The relays' own time bound [s]. 300 s covers every test; a longer run must raise it (a
+# relay that stops cuts the link: bench-suite's ten-minute flight lost it at 300 s until
+# 2026-11-26, and the mapper then heard nothing of the last five minutes).
+SPLIT_RELAY_TIMEOUT_S=${SPLIT_RELAY_TIMEOUT_S:-300}
 
 split_value() { awk -v k="$1" '$1 == k {print $2}' "$2"; }
 
@@ -24,9 +28,9 @@ split_start() {
       --state-dir "$dir/mapper-state" --lcm-url "$LINK_URL" "$@" > "$dir/mapper.out" 2> "$dir/mapper.err"
   bg_ground SPLIT_LINKLOG lcm-logger -q -f --lcm-url="$LINK_URL" "$dir/link.lcm"
   bg_onboard SPLIT_UP "$TOOLS/lcm-link-relay" --from "$LOCAL_URL" --to "$LINK_URL" \
-      --channels 'SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS' --delay-ms "$delay" --timeout 300 --name up 2> "$dir/relay-up.err"
+      --channels 'SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS' --delay-ms "$delay" --timeout "$SPLIT_RELAY_TIMEOUT_S" --name up 2> "$dir/relay-up.err"
   bg_onboard SPLIT_DOWN "$TOOLS/lcm-link-relay" --from "$LINK_URL" --to "$LOCAL_URL" \
-      --channels 'SLAM_MAP|MAPPER_STATUS' --delay-ms "$delay" --timeout 300 --name down 2> "$dir/relay-down.err"
+      --channels 'SLAM_MAP|MAPPER_STATUS' --delay-ms "$delay" --timeout "$SPLIT_RELAY_TIMEOUT_S" --name down 2> "$dir/relay-down.err"
   bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"
   bg_onboard SPLIT_TRACKER "$PROCS/rgbd-tracker" --camera "$SRC/config/cameras/synthetic.yaml" \
       --map-id "$SPLIT_MAP_ID" --set tracker_node.exit_after_idle_s=2,tracker_node.ack_wait_s=20 --lcm-url "$LOCAL_URL" \
@@ -40,17 +44,27 @@ split_capture() {
     || fail "rgbd-capture failed: $(cat "$1/capture.err")"
 }
 
+# _split_link_cut: prints why the link was cut if a relay stopped before the run's end (its
+# --timeout passed, or it failed), nothing otherwise. The finish functions stop every
+# process first, then fail: such a run measured something else.
+_split_link_cut() {
+  kill -0 "$SPLIT_UP" 2>/dev/null && kill -0 "$SPLIT_DOWN" 2>/dev/null && return 0
+  echo "a link relay stopped before the run ended (SPLIT_RELAY_TIMEOUT_S=$SPLIT_RELAY_TIMEOUT_S s)"
+}
+
 split_finish() {
-  local dir=$1 i
+  local dir=$1 i cut
   for ((i = 0; i < 400; i++)); do  # the tracker's own bound is 2 s idle + 20 s for acks
     kill -0 "$SPLIT_TRACKER" 2>/dev/null || break
     sleep 0.1
   done
+  cut=$(_split_link_cut)
   kill -INT "$SPLIT_TRACKER" 2>/dev/null || true
   wait "$SPLIT_TRACKER" || true
   sleep 0.3
   kill -INT "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
   wait "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
+  [ -z "$cut" ] || fail "$cut"
   "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/trajectory.txt" --frames 300 > "$dir/eval.txt" \
     || fail "slam-eval failed on $dir"
   "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
@@ -76,18 +90,20 @@ split_report() {
 # coverage counts against FRAMES; split_finish assumes 300). Also writes DIR/tracker.exit
 # (the tracker's exit status) and DIR/tracker_exit_utime (when it was seen gone, host clock).
 split_finish_frames() {
-  local dir=$1 frames=$2 i status=0
+  local dir=$1 frames=$2 i status=0 cut
   for ((i = 0; i < 400; i++)); do  # the tracker's own bound is 2 s idle + 20 s for acks
     kill -0 "$SPLIT_TRACKER" 2>/dev/null || break
     sleep 0.05
   done
   date +%s%6N > "$dir/tracker_exit_utime"
+  cut=$(_split_link_cut)
   kill -INT "$SPLIT_TRACKER" 2>/dev/null || true
   wait "$SPLIT_TRACKER" || status=$?
   echo "$status" > "$dir/tracker.exit"
   sleep 0.3
   kill -INT "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
   wait "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
+  [ -z "$cut" ] || fail "$cut"
   "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/trajectory.txt" --frames "$frames" > "$dir/eval.txt" \
     || fail "slam-eval failed on $dir"
   "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
