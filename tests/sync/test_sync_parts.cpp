@@ -19,26 +19,43 @@ TEST(SyncOutbox, ResendsWithDoublingIntervalOldestFirstUntilAcknowledged) {
   outbox.sent(1, 101, 0);
   outbox.sent(2, 102, 0);
   EXPECT_TRUE(outbox.resendsDue(kS - 1).empty());
-  auto due = outbox.resendsDue(kS);  // at most two, oldest first
+  auto due = outbox.resendsDue(kS);  // the oldest two
   ASSERT_EQ(due.size(), 2u);
   EXPECT_EQ(*due[0], 100);
   EXPECT_EQ(*due[1], 101);
-  due = outbox.resendsDue(kS);  // keyframe 2 waited too
-  ASSERT_EQ(due.size(), 1u);
-  EXPECT_EQ(*due[0], 102);
+  EXPECT_TRUE(outbox.resendsDue(kS).empty()) << "keyframe 2 waits for the oldest two";
   EXPECT_TRUE(outbox.resendsDue(3 * kS - 1).empty());  // next after 2 s (doubled)
   EXPECT_EQ(outbox.resendsDue(3 * kS).size(), 2u);
   EXPECT_EQ(outbox.sends(0), 3);
+  EXPECT_EQ(outbox.sends(2), 1);
   const std::vector<double> ages = outbox.acknowledgeBelow(1, 3 * kS + kS / 2);
   ASSERT_EQ(ages.size(), 1u);
   EXPECT_DOUBLE_EQ(ages[0], 3.5);
   EXPECT_EQ(outbox.size(), 2u);
+  due = outbox.resendsDue(3 * kS + kS / 2);  // keyframe 2's turn: at once, long due
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_EQ(*due[0], 102);
   // The interval stops growing at resend_max_period_s (4 s): 1, 2, 4, 4, ...
   int64_t t = 3 * kS;
   for (int i = 0; i < 3; ++i) {
     t += 4 * kS;
     EXPECT_FALSE(outbox.resendsDue(t).empty()) << "re-send " << i;
   }
+}
+
+// A link outage of five minutes with a keyframe made every second: the re-sends stay at
+// two keyframes per 4 s, however many wait (before: every waiting keyframe each 4 s).
+TEST(SyncOutbox, AnOutageCostsTheOldestTwoKeyframesNotAllThatWait) {
+  KeyframeOutbox<int> outbox(KeyframeOutboxOptions{1.0, 4.0, 2});
+  int resent = 0;
+  for (int64_t t_ms = 0; t_ms <= 300000; t_ms += 10) {
+    if (t_ms % 1000 == 0) outbox.sent(static_cast<KeyframeId>(t_ms / 1000), 0, t_ms * 1000);
+    resent += static_cast<int>(outbox.resendsDue(t_ms * 1000).size());
+  }
+  EXPECT_EQ(outbox.size(), 301u);
+  EXPECT_LE(resent, 2 * (300 / 4 + 3));
+  EXPECT_GE(resent, 2 * (300 / 4 - 3)) << "the oldest keep being re-sent";
+  EXPECT_EQ(outbox.sends(2), 1) << "the third oldest was never re-sent";
 }
 
 TEST(SyncOutbox, RetainsTheNewestAcknowledgedForAMapperThatLosesThem) {

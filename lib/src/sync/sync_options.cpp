@@ -9,7 +9,7 @@ void SyncOptions::bind(OptionRegistry* r) {
   r->bind(s, "resend_max_period_s", &outbox.resend_max_period_s, 1e-3, 3600.0, "s",
           "tracker: the re-send interval grows to this at most");
   r->bind(s, "resend_max", &outbox.resend_max, 1, 1000, "keyframes",
-          "tracker: keyframes re-sent at one time at most, oldest first");
+          "tracker: only the oldest this many unacknowledged keyframes are re-sent (the others as those are acknowledged)");
   r->bind(s, "retained_keyframes", &outbox.retained, 0, 100000, "keyframes",
           "tracker: acknowledged keyframes kept for a mapper whose journal lost them (rgbd-tracker; a keyframe on the link is about 30 kB)");
   r->bind(s, "receipt_period_s", &receipt_period_s, 1e-3, 3600.0, "s",
