@@ -120,9 +120,7 @@ void kernelSupport(const cv::Mat& kernel, int n, std::vector<float>* support) {
   }
 }
 
-// Gaussian blur by normalised convolution: zero padding, divided by the blurred mask of
-// valid pixels (written to *support; separable, so it is the product of 1-D sums).
-// Replicated or mirrored borders would invent structure fixed to the image frame.
+// The SBI's Gaussian (kSbiBlurSigma), 1-D.
 cv::Mat blurKernel() {
   const int ksize = 2 * static_cast<int>(std::ceil(kBlurHalfWidthSigmas * kSbiBlurSigma)) + 1;
   return cv::getGaussianKernel(ksize, kSbiBlurSigma, CV_32F);
@@ -141,11 +139,15 @@ void blurSupport(const cv::Mat& kernel, cv::Size size, cv::Mat* support) {
   }
 }
 
+// d image / dx and / dy by central differences.
 void gradients(SmallBlurryImage* sbi) {
   cv::Sobel(sbi->image, sbi->grad_x, CV_32F, 1, 0, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
   cv::Sobel(sbi->image, sbi->grad_y, CV_32F, 0, 1, 1, kCentralDiff, 0, cv::BORDER_REPLICATE);
 }
 
+// Gaussian blur by normalised convolution: zero padding, divided by the blurred mask of
+// valid pixels (written to *support). Replicated or mirrored borders would invent structure
+// fixed to the image frame.
 void blurNormalised(cv::Mat* image, cv::Mat* support) {
   const cv::Mat kernel = blurKernel();
   cv::sepFilter2D(*image, *image, CV_32F, kernel, kernel, cv::Point(-1, -1), 0,

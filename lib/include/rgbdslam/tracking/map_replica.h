@@ -22,9 +22,10 @@
 // 640x480; the relocaliser restores the gradients and support it aligns with), every
 // point and its slot (no measurements: Keyframe::releaseMappingData), the pyramids of the
 // hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth,
-// corners and measurements once its points are made) and the JPEG of the cold ones (30-60 kB at quality
-// 90 on textured 640x480 images), unless a keyframe store (keyframe_store.h) holds those:
-// then a keyframe's JPEG is written there when it first goes cold and read back to thaw it.
+// corners and measurements once its points are made) and the JPEG of the cold ones (30-60
+// kB at quality 90 on textured 640x480 images), unless a keyframe store (keyframe_store.h)
+// holds those: then a keyframe's JPEG is written there when it first goes cold and read
+// back to thaw it.
 // Threads: not thread-safe; the tracker's thread owns it.
 #include <memory>
 #include <unordered_map>
