@@ -52,23 +52,7 @@ _split_link_cut() {
   echo "a link relay stopped before the run ended (SPLIT_RELAY_TIMEOUT_S=$SPLIT_RELAY_TIMEOUT_S s)"
 }
 
-split_finish() {
-  local dir=$1 i cut
-  for ((i = 0; i < 400; i++)); do  # the tracker's own bound is 2 s idle + 20 s for acks
-    kill -0 "$SPLIT_TRACKER" 2>/dev/null || break
-    sleep 0.1
-  done
-  cut=$(_split_link_cut)
-  kill -INT "$SPLIT_TRACKER" 2>/dev/null || true
-  wait "$SPLIT_TRACKER" || true
-  sleep 0.3
-  kill -INT "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
-  wait "$SPLIT_MAPPER" "$SPLIT_LINKLOG" "$SPLIT_UP" "$SPLIT_DOWN" "$SPLIT_LOGGER" 2>/dev/null || true
-  [ -z "$cut" ] || fail "$cut"
-  "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/trajectory.txt" --frames 300 > "$dir/eval.txt" \
-    || fail "slam-eval failed on $dir"
-  "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
-}
+split_finish() { split_finish_frames "$1" 300; }
 
 # split_report DIR NAME [FRAMES]: one line of figures (FRAMES published, default 300).
 split_report() {
