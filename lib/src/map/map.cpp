@@ -92,9 +92,11 @@ MapPoint* Map::addPoint(const MapPoint& point) {
   auto [it, inserted] = points_.try_emplace(point.id, point);
   if (!inserted) {
     const int projected = it->second.times_projected, found = it->second.times_found;
+    const DepthRecord record = it->second.depth_record;
     it->second = point;
     it->second.times_projected = projected;
     it->second.times_found = found;
+    it->second.depth_record = record;
   }
   return &it->second;
 }

@@ -775,12 +775,12 @@ DepthIntegrity Tracker::Impl::depthIntegrityOf(const Attempt& attempt, const Rgb
   reading_expected_.clear();
   for (PointSlot* slot : stage_) {
     slot->depth_verdict = DepthVerdict::kUnchecked;
-    if (slot->depth_record.mostlySeenThrough()) continue;
+    if (slot->point->depth_record.mostlySeenThrough()) continue;
     integrity_points_.push_back(slot->point->p_w);
     integrity_slots_.push_back(slot);
     // Found where the pose puts it (so not hidden by something nearer than the sensor's
     // range, which gives no reading either), and its record expects a reading there.
-    reading_expected_.push_back(slot->found && slot->depth_record.expectsReadingAt((attempt.T_c_w * slot->point->p_w).z()));
+    reading_expected_.push_back(slot->found && slot->point->depth_record.expectsReadingAt((attempt.T_c_w * slot->point->p_w).z()));
   }
   const DepthIntegrity integrity =
       checkDepthIntegrity(integrity_points_, attempt.T_c_w, frame, camera_, options_.pose.noise,
@@ -1237,7 +1237,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   updateDepthReference(attempt, frame);
   for (PointSlot* slot : stage_) {
     if (slot->depth_verdict != DepthVerdict::kUnchecked) {
-      slot->depth_record.add(slot->depth_verdict, (T_c_w_ * slot->point->p_w).z());
+      slot->point->depth_record.add(slot->depth_verdict, (T_c_w_ * slot->point->p_w).z());
       slot->depth_verdict = DepthVerdict::kUnchecked;
     }
     if (!slot->searched) continue;

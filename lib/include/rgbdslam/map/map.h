@@ -20,6 +20,7 @@
 #include "rgbdslam/image/corners.h"
 #include "rgbdslam/image/pyramid.h"
 #include "rgbdslam/image/small_blurry_image.h"
+#include "rgbdslam/map/depth_record.h"
 #include "rgbdslam/map/map_types.h"
 #include "rgbdslam/util/option_registry.h"
 
@@ -71,6 +72,7 @@ struct MapPoint {
   Eigen::Vector2d source_uv = Eigen::Vector2d::Zero();  // patch centre, level 0 [px]
   int times_projected = 0;  // tracker: frames in which it was predicted visible and searched
   int times_found = 0;      // tracker: frames in which it was found
+  DepthRecord depth_record;  // tracker: the depth integrity check at accepted poses
 
   MapPoint() = default;
   // A point as the messages describe it (tracker statistics zero).
@@ -110,7 +112,7 @@ class Map {
   const std::set<KeyframeId>& removedKeyframes() const { return removed_keyframes_; }
   size_t numKeyframes() const { return keyframes_.size(); }
 
-  // Adds or replaces a point (keeps tracker statistics when replacing).
+  // Adds or replaces a point (keeps the tracker's statistics and depth record when replacing).
   MapPoint* addPoint(const MapPoint& point);
   MapPoint* point(PointId id);
   const MapPoint* point(PointId id) const;

@@ -34,6 +34,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
 #include "rgbdslam/image/rgbd_frame.h"
+#include "rgbdslam/map/depth_record.h"
 #include "rgbdslam/model/noise_model.h"
 #include "rgbdslam/util/option_registry.h"
 
@@ -68,31 +69,6 @@ struct DepthIntegrity {
     return missing_counted > 0 ? static_cast<double>(missing_counted) / (checked + missing_counted) : 0.0;
   }
   std::string describe() const;  // "12 of 80 map points seen through in depth (...)"
-};
-
-// What the check found at one point.
-enum class DepthVerdict : int8_t { kUnchecked, kAgrees, kSeenThrough, kOccluded, kMissing };
-
-// A map point's record of the check at accepted poses (the tracker keeps one per point).
-struct DepthRecord {
-  static constexpr int kMinChecks = 3;  // the record counts after this many checks with a reading
-  int checks = 0;        // with a reading
-  int seen_through = 0;  // ...of which seen through
-  int missing = 0;       // without a reading
-  float read_max_m = 0.0f;  // the point's farthest depth at a check with a reading [m]
-
-  // Adds an accepted pose's verdict; 'depth_m': the point's depth at that pose.
-  void add(DepthVerdict verdict, double depth_m);
-  // Glass, a wrong point: seen through at most of its checks, so the check leaves it out.
-  bool mostlySeenThrough() const { return checks >= kMinChecks && 2 * seen_through > checks; }
-  // Whether a missing reading at depth 'depth_m' [m] counts as seen through: the surface gave
-  // a reading at most checks, and the point is no farther than at any of them. Why the
-  // distance: the infrared a surface returns falls with its square, so a dark surface read at
-  // 3 m may give none at 4 m, and a camera moving away from one would see "through" a right
-  // pose (synth:flight,minutes=2, the store: lost at frames 2602 and 2744 before).
-  bool expectsReadingAt(double depth_m) const {
-    return checks >= kMinChecks && missing < checks && depth_m <= read_max_m;
-  }
 };
 
 // 'points_w': the visible map points (a sample of at most max_samples is checked, spread

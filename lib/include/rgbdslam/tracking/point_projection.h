@@ -65,10 +65,9 @@ struct PointSlot {
   bool found = false;
   Eigen::Vector2d found_uv = Eigen::Vector2d::Zero();  // level 0
   int found_level = 0;
-  // The depth integrity check (depth_integrity.h): the point's record at accepted poses, and
-  // the current frame's verdict.
-  DepthRecord depth_record;
-  DepthVerdict depth_verdict = DepthVerdict::kUnchecked;  // this frame's check
+  // The depth integrity check (depth_integrity.h): this frame's verdict (the record of
+  // accepted poses is the point's own, MapPoint::depth_record).
+  DepthVerdict depth_verdict = DepthVerdict::kUnchecked;
 };
 
 // Fills the slot's point, source and unprojection Jacobian, and drops its patch cache.
