@@ -56,21 +56,38 @@ TEST_F(LocalMap, KeyframesOutsideTheWindowGoColdAndTheirPointsAreNotSearched) {
   EXPECT_FALSE(views[1].valid);
   EXPECT_FALSE(views[2].valid);
   EXPECT_EQ(replica->map().numPoints(), 3u) << "cold keyframes keep their points";
-  // From keyframe 1's pose all three points are in the image: the cold keyframes' points are
-  // not searched, but marked as waiting for their source (the tracker thaws those first).
+  // ...but not their slots: only keyframe 0's point is searched.
+  ASSERT_EQ(replica->slots().size(), 1u);
+  EXPECT_EQ(replica->slots()[0].point->id, 100);
+  // From keyframe 1's pose all three points are in the image: the cold keyframes' points
+  // count as in view (the tracker thaws those first), and the hot one's slot projects.
   const SE3 T_c_w = keyframe(1).T_c_w();
   makeKeyframeViews(replica->map(), T_c_w, &views);
-  for (PointSlot& slot : replica->slots()) {
-    const bool projected = projectPoint(camera, T_c_w, views, ProjectionOptions{}, &slot);
-    const bool cold_source = slot.point->source_keyframe != 0;
-    EXPECT_EQ(slot.waits_for_source, cold_source) << "point " << slot.point->id;
-    EXPECT_EQ(projected, !cold_source) << "point " << slot.point->id;
+  EXPECT_TRUE(projectPoint(camera, T_c_w, views, ProjectionOptions{}, &replica->slots()[0]));
+  for (const auto& [id, point] : replica->map().points()) {
+    EXPECT_TRUE(inView(camera, T_c_w, point.p_w, ProjectionOptions{})) << "point " << id;
   }
+  EXPECT_FALSE(inView(camera, T_c_w, Vec3(1, 0, -2), ProjectionOptions{})) << "behind the camera";
+  EXPECT_FALSE(inView(camera, T_c_w, Vec3(5, 0, 2), ProjectionOptions{})) << "outside the image";
+}
+
+// A point's depth record lives with the point, so it survives its slot: a keyframe that goes
+// cold and comes back has its points searched again with the record they had.
+TEST_F(LocalMap, APointKeepsItsDepthRecordWhileItsKeyframeIsCold) {
+  for (int i = 0; i < 3; ++i) replica->slots()[2].point->depth_record.add(DepthVerdict::kAgrees, 2.0);
+  ASSERT_EQ(replica->slots()[2].point->id, 102);
+  replica->updateLocalMap({0}, 2, 10, 90);
+  ASSERT_EQ(replica->slots().size(), 1u);
+  replica->updateLocalMap({0, 1, 2}, 2, 10, 90);
+  ASSERT_EQ(replica->slots().size(), 3u);
+  const MapPoint* point = replica->map().point(102);
+  ASSERT_NE(point, nullptr);
+  EXPECT_EQ(point->depth_record.checks, 3);
+  EXPECT_TRUE(point->depth_record.expectsReadingAt(2.0));
 }
 
 TEST_F(LocalMap, ACameraThatComesBackThawsNearestFirstWithinTheBudget) {
   replica->updateLocalMap({0}, 2, 10, 90);
-  for (PointSlot& slot : replica->slots()) slot.patch_level = 1;  // as if patches were cached
   const LocalMapChange change = replica->updateLocalMap({2, 1}, 1, 10, 90);
   EXPECT_EQ(change.thawed, 1);
   EXPECT_EQ(change.left_cold, 1);
@@ -81,15 +98,13 @@ TEST_F(LocalMap, ACameraThatComesBackThawsNearestFirstWithinTheBudget) {
   cv::Mat difference;
   cv::absdiff(keyframe(2).grey(), originals[2], difference);
   EXPECT_LT(cv::mean(difference)[0], 3.0) << "JPEG at quality 90";
-  for (const PointSlot& slot : replica->slots()) {
-    if (slot.source == &keyframe(2)) {
-      EXPECT_EQ(slot.patch_level, -1) << "patch cache of the old image";
-    } else if (slot.source == &keyframe(1)) {
-      EXPECT_EQ(slot.patch_level, 1);
-    }
-  }
+  // Slots for the thawed keyframe's point, none for the keyframes now cold.
+  ASSERT_EQ(replica->slots().size(), 1u);
+  EXPECT_EQ(replica->slots()[0].source, &keyframe(2));
+  EXPECT_EQ(replica->slots()[0].patch_level, -1) << "no patch cache yet";
   replica->updateLocalMap({2, 1}, 1, 10, 90);
   EXPECT_FALSE(keyframe(1).cold()) << "the rest of the window follows on the next call";
+  EXPECT_EQ(replica->slots().size(), 2u);
 }
 
 // With a keyframe store, a cold keyframe's JPEG is on storage, not in memory; thawed, it

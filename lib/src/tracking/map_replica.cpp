@@ -1,5 +1,7 @@
 #include "rgbdslam/tracking/map_replica.h"
 
+#include <algorithm>
+
 #include "rgbdslam/image/codec.h"
 #include "rgbdslam/image/pyramid.h"
 
@@ -25,6 +27,7 @@ void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
 LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
                                           int max_freezes, int jpeg_quality, int max_hot) {
   LocalMapChange change;
+  std::unordered_set<KeyframeId> thawed;
   for (KeyframeId id : wanted) {
     Keyframe* keyframe = map_.keyframe(id);
     if (!keyframe || !keyframe->cold()) continue;
@@ -32,8 +35,10 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
       ++change.left_cold;
     } else if (thaw(keyframe)) {
       ++change.thawed;
+      thawed.insert(id);
     }
   }
+  addSlotsOf(thawed);
   if (max_freezes <= 0) return change;
   // At least as many frozen as thawed: a lost tracker thaws around every relocalisation
   // candidate (8 each, several candidates a frame), and with only max_freezes going back the
@@ -66,11 +71,13 @@ void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
     std::vector<uint8_t>().swap(keyframe->cold_grey);
   }
   ImagePyramid().levels.swap(keyframe->pyramid.levels);
-  for (PointSlot& slot : slots_) {
-    if (slot.source != keyframe) continue;
-    slot.patch_cache.reset();  // made from the pyramid just freed; thawing makes it anew
-    slot.patch_level = -1;
+  // Its points' slots go too (their search state and patch caches were for the pyramid just
+  // freed): thawing makes them anew. The points stay, with their depth records.
+  std::vector<PointId> described;
+  for (const PointSlot& slot : slots_) {
+    if (slot.source == keyframe) described.push_back(slot.point->id);
   }
+  for (PointId id : described) removeSlot(id);
 }
 
 bool MapReplica::thaw(Keyframe* keyframe) {
@@ -84,10 +91,20 @@ bool MapReplica::thaw(Keyframe* keyframe) {
   const Expected<cv::Mat> grey = decodeImage(jpeg.data(), jpeg.size(), 1, camera_.width, camera_.height);
   if (!grey) return false;  // cannot happen with bytes this process encoded (CRC-checked); stays cold
   buildPyramid(*grey, kMaxLevels, &keyframe->pyramid);
-  for (PointSlot& slot : slots_) {
-    if (slot.source == keyframe) slot.patch_level = -1;  // made from the original image
-  }
   return true;
+}
+
+// Slots for the points the keyframes describe, in point id order (the search order follows
+// the slots'): one pass over the map's points for every keyframe thawed in a call (a lost
+// tracker thaws 8 around each relocalisation candidate).
+void MapReplica::addSlotsOf(const std::unordered_set<KeyframeId>& keyframes) {
+  if (keyframes.empty()) return;
+  std::vector<PointId> described;
+  for (const auto& [id, point] : map_.points()) {
+    if (keyframes.count(point.source_keyframe)) described.push_back(id);
+  }
+  std::sort(described.begin(), described.end());
+  for (PointId id : described) addSlot(map_.point(id));
 }
 
 Keyframe* MapReplica::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
@@ -112,8 +129,14 @@ void MapReplica::clear() {
   slot_index_.clear();
 }
 
-// Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists.
+// Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists. A
+// point whose source keyframe is cold has none (thaw() makes it).
 void MapReplica::addSlot(MapPoint* point) {
+  const Keyframe* source = map_.keyframe(point->source_keyframe);
+  if (source && source->cold()) {
+    removeSlot(point->id);
+    return;
+  }
   const auto it = slot_index_.find(point->id);
   if (it != slot_index_.end()) {
     if (!initSlot(map_, camera_, point, &slots_[it->second])) removeSlot(point->id);

@@ -42,11 +42,17 @@ bool initSlot(const Map& map, const PinholeCamera& camera, MapPoint* point, Poin
   return true;
 }
 
+bool inView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& p_w, const ProjectionOptions& options) {
+  const Vec3 p_c = T_c_w * p_w;
+  if (p_c.z() < options.min_depth_m) return false;
+  const auto uv = camera.project(p_c);
+  return uv && camera.inImage(*uv, options.margin_px);
+}
+
 bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
                   const std::vector<KeyframeView>& views, const ProjectionOptions& options,
                   PointSlot* slot) {
   slot->search_level = -1;
-  slot->waits_for_source = false;
   const MapPoint& point = *slot->point;
   slot->p_c = T_c_w * point.p_w;
   if (slot->p_c.z() < options.min_depth_m) return false;
@@ -55,7 +61,6 @@ bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
   if (!uv || !camera.inImage(*uv, options.margin_px)) return false;
   slot->uv = *uv;
   const auto kf = static_cast<size_t>(point.source_keyframe);
-  if (kf < views.size() && views[kf].cold) slot->waits_for_source = true;
   if (kf >= views.size() || !views[kf].valid) return false;
   const KeyframeView& view = views[kf];
   const double z_src = view.src_z_row.dot(point.p_w) + view.src_z_offset;

@@ -1360,9 +1360,17 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
   visible_.clear();
   points_in_view_.assign(views_.size(), 0);
   for (PointSlot& slot : replica_.slots()) {
-    const bool visible = projectPoint(camera_, T_c_w, views_, options_.projection, &slot);
-    if (visible) visible_.push_back(&slot);
-    if (visible || slot.waits_for_source) ++points_in_view_[static_cast<size_t>(slot.point->source_keyframe)];
+    if (!projectPoint(camera_, T_c_w, views_, options_.projection, &slot)) continue;
+    visible_.push_back(&slot);
+    ++points_in_view_[static_cast<size_t>(slot.point->source_keyframe)];
+  }
+  // The points of cold keyframes have no slot (map_replica.h); those in view count for
+  // their keyframes, so that the local map thaws the keyframes the camera came back to.
+  for (const auto& [id, point] : replica_.map().points()) {
+    const auto kf = static_cast<size_t>(point.source_keyframe);
+    if (kf < views_.size() && views_[kf].cold && inView(camera_, T_c_w, point.p_w, options_.projection)) {
+      ++points_in_view_[kf];
+    }
   }
 }
 

@@ -1,6 +1,7 @@
 #pragma once
-// The tracker's replica of the mapper's map (docs/design.md, "Map protocol"), with one search
-// slot per point (point_projection.h: the patch cache and per-frame search state).
+// The tracker's replica of the mapper's map (docs/design.md, "Map protocol"), with a search
+// slot (point_projection.h: the patch cache and per-frame search state) for each point of a
+// hot keyframe.
 //   addKeyframe / addProvisionalPoint: a keyframe the tracker created and its points from
 //   depth, tracked against at once, before the mapper has seen them.
 //   apply(update): a map version's content, which sync/map_follower.h has already judged in
@@ -15,17 +16,19 @@
 //   merely absent from a snapshot stays (a mapper that lost its journal has not had it again yet). Entries that name keyframes the replica lacks are skipped.
 //   updateLocalMap(wanted): the local map. The keyframes nearest the camera keep their
 //   pyramid ('hot'); the others are 'cold': their level-0 image is kept as JPEG (encoded
-//   once), the pyramid freed, and their points are not searched (makeKeyframeViews marks
-//   them invalid) until the camera comes back and the keyframe is thawed (JPEG decoded,
-//   pyramid rebuilt, its points' patch caches dropped).
+//   once), the pyramid freed, and their points lose their slots (the points stay, with their
+//   depth records) until the camera comes back and the keyframe is thawed (JPEG decoded,
+//   pyramid rebuilt, slots made anew in point id order). The tracker counts a cold
+//   keyframe's points in view from the points themselves (point_projection.h, inView).
 // Memory: every keyframe's pose and small blurry image (compact: its image only, 4.8 kB at
-// 640x480; the relocaliser restores the gradients and support it aligns with), every
-// point and its slot (no measurements: Keyframe::releaseMappingData), the pyramids of the
-// hot keyframes (0.41 MB each at 640x480; the tracker frees a keyframe's metric depth,
-// corners and measurements once its points are made) and the JPEG of the cold ones (30-60
-// kB at quality 90 on textured 640x480 images), unless a keyframe store (keyframe_store.h)
-// holds those: then a keyframe's JPEG is written there when it first goes cold and read
-// back to thaw it.
+// 640x480; the relocaliser restores the gradients and support it aligns with); every point
+// (about 150 bytes with its hash-map entry; no measurements: Keyframe::releaseMappingData);
+// the slots of the hot keyframes' points only (about 250 bytes each with their index; over
+// a long flight most points are cold); the pyramids of the hot keyframes (0.41 MB each at
+// 640x480; the tracker frees a keyframe's metric depth, corners and measurements once its
+// points are made) and the JPEG of the cold ones (30-60 kB at quality 90 on textured
+// 640x480 images), unless a keyframe store (keyframe_store.h) holds those: then a
+// keyframe's JPEG is written there when it first goes cold and read back to thaw it.
 // Threads: not thread-safe; the tracker's thread owns it.
 #include <memory>
 #include <unordered_map>
@@ -99,7 +102,8 @@ class MapReplica {
   void removeSlot(PointId id);
   void removePoint(PointId id);
   void removeKeyframe(KeyframeId id);
-  bool thaw(Keyframe* keyframe);
+  bool thaw(Keyframe* keyframe);  // the pyramid only: addSlotsOf() then makes the slots
+  void addSlotsOf(const std::unordered_set<KeyframeId>& keyframes);
   void freeze(Keyframe* keyframe, int jpeg_quality);
 
   PinholeCamera camera_;

@@ -28,7 +28,7 @@ namespace rgbdslam {
 // the third row of its T_c_w (for the point's depth in the source camera).
 struct KeyframeView {
   bool valid = false;
-  bool cold = false;  // the keyframe has no pyramid now (map_replica.h): its points wait
+  bool cold = false;  // the keyframe has no pyramid now (map_replica.h): its points have no slot
   Mat3 R_cur_src = Mat3::Identity();
   Eigen::RowVector3d src_z_row = Eigen::RowVector3d::Zero();  // z_src = row . p_w + t_z
   double src_z_offset = 0.0;
@@ -55,7 +55,6 @@ struct PointSlot {
   int patch_level = -1;
   const Patch& patch() const { return patch_cache->patch; }  // patch_level >= 0
   // Per frame, from projectPoint().
-  bool waits_for_source = false;  // in the image, but its source keyframe is cold
   Vec3 p_c = Vec3::Zero();
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();  // predicted pixel, level 0
   Eigen::Matrix2d A_cur_src = Eigen::Matrix2d::Identity();
@@ -80,6 +79,10 @@ struct ProjectionOptions {
 
   void bind(OptionRegistry* registry, const std::string& section);  // margin_px only
 };
+
+// Whether p_w lies in front of the camera at T_c_w and projects into the image (with margin):
+// a point of a cold keyframe (no slot) waiting for the camera to come back.
+bool inView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& p_w, const ProjectionOptions& options);
 
 // p_c, uv, A_cur_src and search_level of the slot at pose T_c_w. False when the point is
 // behind the camera, outside the image (with margin), its source view is unknown or the
