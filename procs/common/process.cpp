@@ -1,10 +1,13 @@
 #include "common/process.h"
 
 #include <malloc.h>
+#include <sched.h>
 
 #include <chrono>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -22,6 +25,30 @@ std::atomic<bool>& installStopHandlers() {
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
   return g_stop;
+}
+
+Status setRealtimePriority(int priority) {
+  const int lowest = sched_get_priority_min(SCHED_FIFO), highest = sched_get_priority_max(SCHED_FIFO);
+  if (priority < lowest || priority > highest) {
+    return Error{"real-time priority " + std::to_string(priority) + " is outside SCHED_FIFO's " +
+                 std::to_string(lowest) + "-" + std::to_string(highest)};
+  }
+  sched_param param{};
+  param.sched_priority = priority;
+  // pid 0: the calling thread (Linux schedules threads, not processes).
+  if (sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &param) != 0) {
+    const int error = errno;
+    return Error{"SCHED_FIFO priority " + std::to_string(priority) + " refused: " + std::strerror(error) +
+                 (error == EPERM ? " (needs root, CAP_SYS_NICE or an RLIMIT_RTPRIO of at least that)" : "")};
+  }
+  return Status{};
+}
+
+int realtimePriority() {
+  const int policy = sched_getscheduler(0) & ~SCHED_RESET_ON_FORK;
+  if (policy != SCHED_FIFO && policy != SCHED_RR) return 0;
+  sched_param param{};
+  return sched_getparam(0, &param) == 0 ? param.sched_priority : 0;
 }
 
 MemoryUsage memoryUsage() {

@@ -30,6 +30,11 @@ struct TrackerProcessOptions {
   int max_backlog_frames = 2;    // [frames]
   double exit_after_idle_s = 0;  // 0: run until stopped [s]
   double ack_wait_s = 10;        // [s]
+  // The tracking thread under SCHED_FIFO at this priority (common/process.h,
+  // setRealtimePriority), 1-99; 0: the normal policy. Off by default: a desktop run shares
+  // its cores with whatever else runs; the onboard scripts (scripts/run-onboard,
+  // scripts/bench-suite) set it.
+  int realtime_priority = 0;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
   // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma

@@ -63,6 +63,11 @@ void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
 }
 
 int TrackerNode::run(const std::atomic<bool>& stop) {
+  if (const int priority = options_.process.realtime_priority; priority > 0) {
+    if (Status set = setRealtimePriority(priority); !set) {
+      std::cerr << "rgbd-tracker: warning: tracking at the normal priority: " << set.error() << "\n";
+    }
+  }
   auto frames = subscribeRaw(local_, options_.channels.frame, this, &TrackerNode::onFrame);
   auto maps = subscribeRaw(link_, options_.channels.map, this, &TrackerNode::onMap);
   Clock::time_point finishing_since{};  // when the frames stopped; epoch: they have not
@@ -352,7 +357,8 @@ void TrackerNode::publishStatus() {
                      {"maps_implausible", c.maps_implausible},
                      {"rss_kb", memory.rss_kb},
                      {"peak_rss_kb", memory.peak_rss_kb},
-                     {"heap_kb", memory.heap_kb}};
+                     {"heap_kb", memory.heap_kb},
+                     {"realtime_priority", realtimePriority()}};
   status.timings_ms = {{"track_ms_median", track_ms_.quantile(0.5)},
                        {"track_ms_p99", track_ms_.quantile(0.99)},
                        {"latency_ms_median", latency_ms_.quantile(0.5)},

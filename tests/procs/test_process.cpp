@@ -4,6 +4,8 @@
 
 #include <cstring>
 #include <memory>
+#include <string>
+#include <thread>
 
 namespace rgbdslam {
 namespace {
@@ -33,6 +35,38 @@ TEST(MemoryUsage, ReadsTheResidentPeakAndHeapMemoryOfThisProcess) {
   if (before.heap_kb >= 0) {
     EXPECT_LT(after.heap_kb - before.heap_kb, 1024) << "the heap gave the block back";
   }
+}
+
+// Run in a thread of its own, so that the test's thread keeps its policy. As root (CI) the
+// thread runs under SCHED_FIFO and a thread it starts does not; elsewhere the refusal says
+// why and the thread stays as it was.
+TEST(RealtimePriority, TheCallingThreadOnlyAndNotTheThreadsItStarts) {
+  std::string error;
+  int own = -1, child = -1;
+  std::thread([&] {
+    const Status set = setRealtimePriority(3);
+    if (!set) error = set.error();
+    own = realtimePriority();
+    std::thread([&] { child = realtimePriority(); }).join();
+  }).join();
+  EXPECT_EQ(realtimePriority(), 0) << "the test's own thread is untouched";
+  EXPECT_EQ(child, 0) << "SCHED_RESET_ON_FORK: a started thread runs at the normal priority";
+  if (error.empty()) {
+    EXPECT_EQ(own, 3);
+  } else {
+    std::printf("not permitted here (%s): the refusal is checked\n", error.c_str());
+    EXPECT_EQ(own, 0);
+    EXPECT_NE(error.find("refused"), std::string::npos) << error;
+  }
+}
+
+TEST(RealtimePriority, APriorityOutsideTheRangeIsAnError) {
+  for (int priority : {0, -1, 100}) {
+    const Status set = setRealtimePriority(priority);
+    ASSERT_FALSE(set) << priority;
+    EXPECT_NE(set.error().find("outside SCHED_FIFO's 1-99"), std::string::npos) << set.error();
+  }
+  EXPECT_EQ(realtimePriority(), 0);
 }
 
 }  // namespace
