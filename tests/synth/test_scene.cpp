@@ -778,5 +778,34 @@ TEST(SyntheticScene, CoveredFramesAreDarkWithoutDepth) {
   }
 }
 
+// trueDepth is the depth a noise-free sensor reads where it reads any, and has a depth
+// where the sensor reads none: glass and the corridor's far end beyond the 4.5 m range.
+TEST(SyntheticScene, TrueDepthIsTheSensorsDepthWithoutItsHoles) {
+  const SyntheticScene scene(*parseSyntheticSpec("corridor,frames=10,noise_sigma=0,depth_sigma=0,quantise=0"));
+  const cv::Mat measured = scene.render(0).depthMetres();
+  const cv::Mat truth = scene.trueDepth(scene.groundTruthPose(0));
+  ASSERT_EQ(truth.type(), CV_32FC1);
+  ASSERT_EQ(truth.size(), measured.size());
+  int compared = 0, only_true = 0, far = 0;
+  double worst = 0.0;
+  for (int v = 0; v < truth.rows; ++v) {
+    for (int u = 0; u < truth.cols; ++u) {
+      const float t = truth.at<float>(v, u), m = measured.at<float>(v, u);
+      ASSERT_TRUE(std::isfinite(t)) << "the corridor is closed: every ray hits something";
+      if (std::isfinite(m)) {
+        ++compared;
+        worst = std::max(worst, static_cast<double>(std::abs(t - m)));
+      } else {
+        ++only_true;
+        far += t > 4.5f;
+      }
+    }
+  }
+  EXPECT_GT(compared, truth.total() / 4);
+  EXPECT_LT(worst, 1e-3) << "without noise and quantisation the sensor reads the truth";
+  EXPECT_GT(only_true, 1000) << "the far end and glass give no reading, but have a depth";
+  EXPECT_GT(far, 1000);
+}
+
 }  // namespace
 }  // namespace rgbdslam

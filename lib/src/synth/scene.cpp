@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <opencv2/imgcodecs.hpp>
@@ -578,6 +579,15 @@ void SyntheticScene::blurColour(const PinholeCamera& cast_camera, const SE3& T_w
     sum += sub_float;
   }
   sum.convertTo(*colour, CV_8UC3, 1.0 / synthetic::kBlurSubFrames);
+}
+
+cv::Mat SyntheticScene::trueDepth(const SE3& T_w_c) const {
+  synthetic::CleanFrame clean;
+  synthetic::castRays(*world_, lens_ ? lens_->canvas : camera_, T_w_c, &clean);
+  if (lens_) synthetic::resampleThroughLens(*lens_, &clean);
+  cv::Mat z = clean.hit_z.clone();  // 0 where nothing is hit
+  z.setTo(std::numeric_limits<float>::quiet_NaN(), clean.hit_z <= 0.0f);
+  return z;
 }
 
 RgbdFrame SyntheticScene::renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces) const {

@@ -245,6 +245,11 @@ class SyntheticScene {
   // As render(i) but from an arbitrary pose (noise and depth schedule of frame i). If
   // 'surfaces' is given it receives a CV_8UC1 image of SyntheticSurface values.
   RgbdFrame renderPose(const SE3& T_w_c, size_t i, cv::Mat* surfaces = nullptr) const;
+  // The truth a depth image approximates: camera-frame depth z [m] of the first surface each
+  // pixel's ray hits at T_w_c, glass and black surfaces included and at any range, NaN where
+  // the ray hits nothing; no noise, no sensor effect. For measuring what a method placed
+  // where (bench_epipolar).
+  cv::Mat trueDepth(const SE3& T_w_c) const;
   // The auto-exposure gain of frame i (1 without auto exposure), and the gain its metering
   // asks for (target grey / mean grey of the clean image of frame i, within [1/4, 4]).
   double exposureGain(size_t i) const;
