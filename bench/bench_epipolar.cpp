@@ -8,7 +8,8 @@
 // whole runs (docs/open_work.md, session 23).
 // Counters: points, wrong_pct (of the points), nearer_pct and beyond_range_pct (of the wrong
 // ones: placed nearer than the truth; true depth beyond the search's 8 m), and the time of
-// one pair's search. Run: build/bench/bench_epipolar.
+// one pair's search; each scene without (/0) and with (/1) the cross-check
+// (EpipolarOptions::cross_check). Run: build/bench/bench_epipolar.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -55,6 +56,7 @@ double trueDepthNear(const cv::Mat& depth, const Eigen::Vector2d& uv, double z) 
 }
 
 // 'spec' rendered; pairs (first + k step, + gap) for k while the newer frame is <= last.
+// state.range(0): EpipolarOptions::cross_check.
 void searchPairs(benchmark::State& state, const std::string& spec, size_t first, size_t last,
                  size_t step, size_t gap) {
   const auto options = parseSyntheticSpec(spec);
@@ -76,6 +78,7 @@ void searchPairs(benchmark::State& state, const std::string& spec, size_t first,
   EpipolarOptions epipolar;  // as the mapper's in the depth modes
   epipolar.skip_corners_with_depth = true;
   epipolar.weak_until_points = 0;
+  epipolar.cross_check = state.range(0) != 0;
   const PatchMatchOptions matching;
   long points = 0, wrong = 0, nearer = 0, beyond = 0;
   for (const Pair& p : pairs) {  // the counts: each pair once
@@ -121,9 +124,9 @@ void BM_EpipolarFlightHall(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_EpipolarRoom)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_EpipolarCorridor)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_EpipolarFlightRoomA)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_EpipolarFlightHall)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EpipolarRoom)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EpipolarCorridor)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EpipolarFlightRoomA)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EpipolarFlightHall)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -137,6 +137,31 @@ MatchOutcome bestDistinctMatch(const Patch& patch, const cv::Mat& image,
   return MatchOutcome::kFound;
 }
 
+// The cross-check (stereo's left-right consistency): the match's patch in 'other', searched
+// back along its own epipolar segment in 'keyframe', finds the corner it came from (within
+// 2 px at the level). A chance match on the long near end of a segment (a surface beyond
+// the range, a "near ghost") mostly finds another corner.
+bool matchesBack(const Keyframe& keyframe, const Keyframe& other, const PinholeCamera& camera,
+                 const EpipolarOptions& options, const PatchMatchOptions& matching,
+                 const Candidate& cand, const cv::Point2i& match) {
+  const int level = cand.level;
+  const cv::Mat& other_image = other.pyramid.levels[level];
+  Patch back_patch;
+  if (!extractPatch(other_image, match, &back_patch)) return false;
+  const Eigen::Vector2d uv_match = zeroFromLevel(Eigen::Vector2d(match.x, match.y), level);
+  const SE3 T_k_o = keyframe.T_c_w() * other.T_w_c;
+  const auto line = epipolarSegment(camera.unproject(uv_match, 1.0), T_k_o, level, camera, options);
+  if (line.size() < 2) return false;
+  const auto near = cornersNearLine(keyframe.corners[level], line, options.line_tolerance_px);
+  cv::Point2i back;
+  if (bestDistinctMatch(back_patch, keyframe.pyramid.levels[level], near, options,
+                        matching.acceptance(back_patch), &back) != MatchOutcome::kFound) {
+    return false;
+  }
+  const cv::Point2i d = back - cand.corner;
+  return d.x * d.x + d.y * d.y <= kDistinctRadius2;
+}
+
 // Triangulates the match and checks parallax, depth range and reprojection in both views.
 std::optional<Vec3> triangulateChecked(const Keyframe& kf, const Eigen::Vector2d& uv_k,
                                        const Keyframe& other, const Eigen::Vector2d& uv_o, int level,
@@ -203,6 +228,10 @@ void searchCandidates(const Keyframe& keyframe, const Keyframe& other, const Pin
         bestDistinctMatch(patch, other_image, near, options, matching.acceptance(patch), &match);
     if (outcome == MatchOutcome::kNoMatch) { ++st->no_match; continue; }
     if (outcome == MatchOutcome::kAmbiguous) { ++st->ambiguous; continue; }
+    if (options.cross_check && !matchesBack(keyframe, other, camera, options, matching, cand, match)) {
+      ++st->cross_check_failed;
+      continue;
+    }
     Eigen::Vector2d pos(match.x, match.y);
     if (!refineSubpixel(patch, other_image, &pos)) { ++st->subpixel_failed; continue; }
     const Eigen::Vector2d uv_o = zeroFromLevel(pos, level);
@@ -231,6 +260,10 @@ void EpipolarOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "epipolar_min_separation_px", &min_separation_px, 0.0, 100.0, "px", "distance from points the keyframe measures (level 0)");
   r->bind(s, "epipolar_line_tolerance_px", &line_tolerance_px, 0.1, 20.0, "level px", "corner distance from the epipolar segment");
   r->bind(s, "epipolar_distinctiveness", &distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
+  r->bind(s, "epipolar_cross_check", &cross_check,
+          "depth modes: keep a match only when its patch, searched back along its own epipolar "
+          "segment, finds the corner it came from (stereo's left-right consistency; off: see "
+          "epipolar_search.h)");
   r->bind(s, "epipolar_min_parallax_deg", &min_parallax_deg, 0.0, 90.0, "deg", "smaller ray angles do not triangulate");
   r->bind(s, "epipolar_max_reprojection_px", &max_reprojection_px, 0.1, 20.0, "level px", "triangulated point's error in either view");
 }

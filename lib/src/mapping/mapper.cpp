@@ -269,6 +269,7 @@ int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& othe
   // modes the keyframe's points from depth already took the weak corners that have depth.
   if (depthPointsAllowed(mode_, kf.id)) eo.weak_until_points = 0;
   eo.skip_corners_with_depth = depthPointsAllowed(mode_, kf.id);
+  eo.cross_check = eo.cross_check && depthPointsAllowed(mode_, kf.id);  // see EpipolarOptions
   const PointId first_id = mapperPointId(kf.id, created_before);
   const auto created = epipolarSearch(kf, other, camera_, eo, options_.matching, first_id);
   for (const EpipolarPoint& ep : created) {

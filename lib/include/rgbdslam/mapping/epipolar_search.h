@@ -2,8 +2,9 @@
 // New map points by epipolar search (PTAM's AddSomeMapPoints; paper III-C): for corners of
 // a new keyframe that have no depth reading (every corner in mono mode), search the 8x8
 // patch along the epipolar segment of the plausible depth range in another keyframe (the
-// nearest one) among that keyframe's FAST corners of the same pyramid level, refine the best
-// ZMSSD match to sub-pixel accuracy and triangulate the two rays (midpoint).
+// nearest one) among that keyframe's FAST corners of the same pyramid level, (optionally)
+// check that the best ZMSSD match searched back finds the corner (cross_check), refine it to
+// sub-pixel accuracy and triangulate the two rays (midpoint).
 //
 // Call order: epipolarSearch(new_kf, nearest_kf, ...) after the new keyframe's own
 // measurements are in it (corners near them are skipped); the caller adds the returned
@@ -35,6 +36,19 @@ struct EpipolarOptions {
   double min_separation_px = 8.0;     // from measured points and each other, level 0 [px]
   double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
   double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]
+  // The match searched back along its own epipolar segment must find the corner it came
+  // from (within 2 px at the level): stereo's left-right consistency. At exact poses
+  // (bench_epipolar, 2026-11-27) it takes the flight's hall from 14.5 % wrong points to 5.4 %
+  // (12 points refused, all of them wrong: chance matches on the near end of segments whose
+  // true match lies beyond the range), the corridor from 13.2 % to 11.0 % (7 of 8 refused
+  // wrong), the room with every sensor effect from 1.1 % to 0.5 % (9 of 22), for
+  // 1.5-3.6 times the search time. Off by default: in whole runs (--deterministic, docs/open_work.md,
+  // session 23) it carried the 2-minute flight through the hall (2835 of 3600 posed, ATE
+  // 45 mm; 933 and lost there without), but the flight's first 720 frames got worse on 7 of
+  // 10 worlds (median ATE 8.5 mm against 5.5) and teddy 6.6 mm against 5.7. The mapper
+  // applies it in the depth modes only (mono searches every corner, and the paper's Table I
+  // was measured without it).
+  bool cross_check = false;
   double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
   double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
   // Only corners without a depth reading (the depth modes); set by the mapper per keyframe
@@ -51,8 +65,8 @@ struct EpipolarPoint {
 };
 
 struct EpipolarStats {
-  int tried = 0, no_candidate = 0, no_match = 0, ambiguous = 0, subpixel_failed = 0,
-      bad_triangulation = 0, created = 0;
+  int tried = 0, no_candidate = 0, no_match = 0, ambiguous = 0, cross_check_failed = 0,
+      subpixel_failed = 0, bad_triangulation = 0, created = 0;
 };
 
 // Points ids are first_id + i; 'matching' accepts the best match. 'stats' (optional)
