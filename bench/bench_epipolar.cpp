@@ -5,7 +5,9 @@
 // (SyntheticScene::trueDepth: glass and black surfaces and every range included; the closest
 // within 1 px, since corners sit on edges): wrong when more than 10 % off. Exact poses take
 // the tracker out of the measure, so a change to the search is measured without the chaos of
-// whole runs (docs/open_work.md, session 23).
+// whole runs (docs/open_work.md, session 23). Unlike the mapper, it pairs frames a fixed gap
+// apart (not the mapper's choice of partner) and its keyframes measure no points, so corners
+// near the points from depth are tried too (the mapper skips those within 8 px).
 // Counters: points, wrong_pct (of the points), nearer_pct and beyond_range_pct (of the wrong
 // ones: placed nearer than the truth; true depth beyond the search's 8 m), and the time of
 // one pair's search; each scene without (/0) and with (/1) the cross-check

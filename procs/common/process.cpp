@@ -3,8 +3,8 @@
 #include <malloc.h>
 #include <sched.h>
 
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -27,7 +27,7 @@ std::atomic<bool>& installStopHandlers() {
   return g_stop;
 }
 
-Status setRealtimePriority(int priority) {
+Status setRealtimePriority(int priority, bool reset_on_fork) {
   const int lowest = sched_get_priority_min(SCHED_FIFO), highest = sched_get_priority_max(SCHED_FIFO);
   if (priority < lowest || priority > highest) {
     return Error{"real-time priority " + std::to_string(priority) + " is outside SCHED_FIFO's " +
@@ -36,7 +36,7 @@ Status setRealtimePriority(int priority) {
   sched_param param{};
   param.sched_priority = priority;
   // pid 0: the calling thread (Linux schedules threads, not processes).
-  if (sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &param) != 0) {
+  if (sched_setscheduler(0, SCHED_FIFO | (reset_on_fork ? SCHED_RESET_ON_FORK : 0), &param) != 0) {
     const int error = errno;
     return Error{"SCHED_FIFO priority " + std::to_string(priority) + " refused: " + std::strerror(error) +
                  (error == EPERM ? " (needs root, CAP_SYS_NICE or an RLIMIT_RTPRIO of at least that)" : "")};

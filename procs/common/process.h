@@ -47,15 +47,16 @@ void printLoopClosures(const LoopClosureCounters& loops);
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.
 void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store);
 
-// Puts the calling thread under SCHED_FIFO at 'priority' (1-99), with SCHED_RESET_ON_FORK:
-// threads it starts later run under the normal policy (an encoder or worker thread must not
-// take the core from the thread it serves). Why: on a shared flight computer a frame's
-// latency is mostly its wait for a core, not its work (docs/open_work.md, session 20: on the
-// corridor through the suite the slow frames used 1.8 ms of CPU and waited 4 ms). The
-// kernel's real-time throttling (sched_rt_runtime_us, 0.95 s a second by default) keeps a
-// runaway thread from locking the machine. An error names the system's reason (no root,
-// CAP_SYS_NICE or RLIMIT_RTPRIO): the caller goes on at the normal priority.
-Status setRealtimePriority(int priority);
+// Puts the calling thread under SCHED_FIFO at 'priority' (1-99). With 'reset_on_fork' the
+// threads it starts later run under the normal policy (SCHED_RESET_ON_FORK: an encoder or
+// worker thread must not take the core from the thread it serves); without, they inherit it
+// (LCM's receive threads, which carry every frame to the tracking thread). Why: on a shared
+// flight computer a frame's latency is mostly its wait for a core, not its work
+// (docs/design.md, "Threads"). The kernel's real-time throttling (sched_rt_runtime_us, 0.95 s
+// a second by default) keeps a runaway thread from locking the machine. An error names the
+// system's reason (no root, CAP_SYS_NICE or RLIMIT_RTPRIO): the caller goes on at the normal
+// priority.
+Status setRealtimePriority(int priority, bool reset_on_fork = true);
 // The calling thread's SCHED_FIFO or SCHED_RR priority; 0 under a normal policy.
 int realtimePriority();
 

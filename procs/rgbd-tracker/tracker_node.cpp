@@ -63,13 +63,18 @@ void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
 }
 
 int TrackerNode::run(const std::atomic<bool>& stop) {
-  if (const int priority = options_.process.realtime_priority; priority > 0) {
-    if (Status set = setRealtimePriority(priority); !set) {
+  // tracker_node.realtime_priority: LCM's receive threads start with the first subscriptions
+  // and carry every frame and map to this thread, so they inherit SCHED_FIFO; the threads
+  // started after them (encoder, keyframe worker) run at the normal priority.
+  const int priority = options_.process.realtime_priority;
+  if (priority > 0) {
+    if (Status set = setRealtimePriority(priority, /*reset_on_fork=*/false); !set) {
       std::cerr << "rgbd-tracker: warning: tracking at the normal priority: " << set.error() << "\n";
     }
   }
   auto frames = subscribeRaw(local_, options_.channels.frame, this, &TrackerNode::onFrame);
   auto maps = subscribeRaw(link_, options_.channels.map, this, &TrackerNode::onMap);
+  if (priority > 0 && realtimePriority() == priority) (void)setRealtimePriority(priority, /*reset_on_fork=*/true);
   Clock::time_point finishing_since{};  // when the frames stopped; epoch: they have not
   while (!stop) {
     handleAvailable(encoding_.empty() ? kLoopTimeoutMs : kEncodingPollMs);

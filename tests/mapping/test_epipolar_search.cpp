@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "rgbdslam/synth/scene.h"
 
@@ -73,7 +74,8 @@ TEST(EpipolarSearch, TriangulatedPointsLieOnTheSurface) {
   std::sort(errors.begin(), errors.end());
   ASSERT_GE(errors.size(), 50u) << "tried " << stats.tried << ", no candidate " << stats.no_candidate
                                 << ", no match " << stats.no_match << ", ambiguous " << stats.ambiguous
-                                << ", cross-check " << stats.cross_check_failed << ", subpixel " << stats.subpixel_failed << ", triangulation "
+                                << ", cross-check " << stats.cross_check_failed
+                                << ", subpixel " << stats.subpixel_failed << ", triangulation "
                                 << stats.bad_triangulation;
   const double median = errors[errors.size() / 2];
   const double p90 = errors[errors.size() * 9 / 10];
@@ -136,9 +138,9 @@ std::unique_ptr<Keyframe> keyframeWithDepthOf(const SyntheticScene& scene, int f
   return makeKeyframe(data, KeyframeBuildOptions{});
 }
 
-// The flight's hall: walls 6-12 m away, beyond the sensor's 8 m, so their corners have no
-// depth and their true match lies beyond the searched segment; the best match on it is a
-// chance one, too near ("near ghosts", docs/open_work.md, sessions 22-23). The cross-check
+// The flight's hall: walls 6-12 m away, beyond the sensor's range (4.5 m) and the search's
+// segment (8 m), so their corners have no depth and their true match lies beyond the
+// segment; the best match on it is a chance one, too near ("near ghosts", docs/open_work.md, sessions 22-23). The cross-check
 // refuses mostly those.
 TEST(EpipolarSearch, TheCrossCheckRefusesTheHallsNearGhosts) {
   const SyntheticScene scene(*parseSyntheticSpec("flight,frames=1000"));

@@ -37,17 +37,12 @@ struct EpipolarOptions {
   double line_tolerance_px = 1.5;     // corner distance from the segment [level px]
   double distinctiveness = 0.8;       // best ZMSSD < this * second best (> 2 px away) [-]
   // The match searched back along its own epipolar segment must find the corner it came
-  // from (within 2 px at the level): stereo's left-right consistency. At exact poses
-  // (bench_epipolar, 2026-11-27) it takes the flight's hall from 14.5 % wrong points to 5.4 %
-  // (12 points refused, all of them wrong: chance matches on the near end of segments whose
-  // true match lies beyond the range), the corridor from 13.2 % to 11.0 % (7 of 8 refused
-  // wrong), the room with every sensor effect from 1.1 % to 0.5 % (9 of 22), for
-  // 1.5-3.6 times the search time. Off by default: in whole runs (--deterministic, docs/open_work.md,
-  // session 23) it carried the 2-minute flight through the hall (2835 of 3600 posed, ATE
-  // 45 mm; 933 and lost there without), but the flight's first 720 frames got worse on 7 of
-  // 10 worlds (median ATE 8.5 mm against 5.5) and teddy 6.6 mm against 5.7. The mapper
-  // applies it in the depth modes only (mono searches every corner, and the paper's Table I
-  // was measured without it).
+  // from (within 2 px at the level): stereo's left-right consistency, against chance matches
+  // on the near end of a segment whose true match lies beyond it (a surface beyond the
+  // range: "near ghosts"). It costs 1.5-3.6 times the search time (bench_epipolar). Off:
+  // whole runs do not gain from it yet (docs/open_work.md, session 23). The mapper applies it
+  // in the depth modes only (mono searches every corner, and the paper's Table I was
+  // measured without it).
   bool cross_check = false;
   double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
   double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
