@@ -28,12 +28,17 @@ TEST(TriangulateMidpoint, RejectsParallelAndBehind) {
                                    Vec3(0.2, 0, 0), (Vec3(0.2, 0, 0) - p).normalized()));
 }
 
-// Keyframe from a rendered frame at its exact pose, without depth (as in mono mode).
-std::unique_ptr<Keyframe> keyframeOf(const SyntheticScene& scene, int frame, KeyframeId id) {
+// Keyframe from a rendered frame at its exact pose, without depth (as in mono mode) or with
+// the sensor's depth (the depth modes: epipolar search tries only the corners without a
+// reading).
+std::unique_ptr<Keyframe> keyframeOf(const SyntheticScene& scene, int frame, KeyframeId id,
+                                     bool with_depth = false) {
+  const RgbdFrame rendered = scene.render(frame);
   KeyframeData data;
   data.id = id;
   data.T_w_c = scene.groundTruthPose(frame);
-  data.grey = scene.render(frame).grey();
+  data.grey = rendered.grey();
+  if (with_depth) data.depth = rendered.depth, data.depth_scale = rendered.depth_scale;
   return makeKeyframe(data, KeyframeBuildOptions{});
 }
 
@@ -126,18 +131,6 @@ TEST(EpipolarSearch, WeakCornersOfAFewPointsKeyframeTriangulateInForwardMotion) 
   EXPECT_GE(within_10_percent, 0.7);  // measured 0.77
 }
 
-// Keyframe of frame i at its exact pose with the sensor's depth (the depth modes: epipolar
-// search tries only the corners without a reading).
-std::unique_ptr<Keyframe> keyframeWithDepthOf(const SyntheticScene& scene, int frame, KeyframeId id) {
-  const RgbdFrame rendered = scene.render(frame);
-  KeyframeData data;
-  data.id = id;
-  data.T_w_c = scene.groundTruthPose(frame);
-  data.grey = rendered.grey();
-  data.depth = rendered.depth, data.depth_scale = rendered.depth_scale;
-  return makeKeyframe(data, KeyframeBuildOptions{});
-}
-
 // The flight's hall: walls 6-12 m away, beyond the sensor's range (4.5 m) and the search's
 // segment (8 m), so their corners have no depth and their true match lies beyond the
 // segment; the best match on it is a chance one, too near ("near ghosts", docs/open_work.md, sessions 22-23). The cross-check
@@ -152,8 +145,8 @@ TEST(EpipolarSearch, TheCrossCheckRefusesTheHallsNearGhosts) {
   const PatchMatchOptions matching;
   int points[2] = {0, 0}, wrong[2] = {0, 0};  // [unchecked, checked]
   for (const int frame : {836, 848, 860, 872}) {
-    const auto older = keyframeWithDepthOf(scene, frame, 0);
-    const auto newer = keyframeWithDepthOf(scene, frame + 20, 1);
+    const auto older = keyframeOf(scene, frame, 0, /*with_depth=*/true);
+    const auto newer = keyframeOf(scene, frame + 20, 1, /*with_depth=*/true);
     const cv::Mat truth = scene.trueDepth(newer->T_w_c);
     for (const bool check : {false, true}) {
       for (const EpipolarPoint& ep : epipolarSearch(*newer, *older, scene.camera(), check ? checked : unchecked,
