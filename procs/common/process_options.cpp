@@ -27,8 +27,8 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
   r->bind(s, "realtime_priority", &realtime_priority, 0, 99, "SCHED_FIFO priority",
           "run the tracking thread under SCHED_FIFO at this priority, so that a frame does not wait "
           "for a core while the mapper, the capture or other software runs (needs root, CAP_SYS_NICE "
-          "or RLIMIT_RTPRIO; refused: a warning, normal priority); threads it starts run at the "
-          "normal priority (0: normal priority)");
+          "or RLIMIT_RTPRIO; refused: a warning, normal priority); LCM's receive threads, which carry "
+          "its frames, too; the encoder and keyframe worker at the normal priority (0: normal priority)");
   r->bind(s, "keyframe_grey", &keyframe_encoding.jpeg_grey, {{"jpeg", true}, {"png", false}},
           "keyframe image on the link (png is lossless)");
   r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",
