@@ -105,6 +105,26 @@ int subsampledDepthStep(int8_t format) {
   }
 }
 
+// 'image' as rows x cols of 'type', keeping its buffer when it has that size and nothing
+// else holds it (cv::Mat::create alone would keep a buffer another Mat still reads).
+void reuseOrCreate(cv::Mat* image, int rows, int cols, int type) {
+  if (!image->u || image->u->refcount != 1 || !image->isContinuous()) image->release();
+  image->create(rows, cols, type);
+}
+
+// Raw pixels of 'type' into 'image' (reused), or an error naming 'what'.
+Status copyRaw(const std::vector<uint8_t>& bytes, int width, int height, int type, const std::string& what,
+               cv::Mat* image) {
+  const size_t expected = static_cast<size_t>(width) * height * CV_ELEM_SIZE(type);
+  if (bytes.size() != expected) {
+    return Error{what + " has " + std::to_string(bytes.size()) + " bytes, " + sizeText(width, height) + " needs " +
+                 std::to_string(expected)};
+  }
+  reuseOrCreate(image, height, width, type);
+  std::memcpy(image->data, bytes.data(), expected);
+  return Status{};
+}
+
 // Raw, zlib or inverse-depth bytes -> CV_16UC1 at depth_scale units per metre; formats as
 // in rgbd_frame_t / keyframe_t.
 Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, int width,
@@ -140,13 +160,8 @@ Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, 
   if (format != rgbdslam::rgbd_frame_t::DEPTH_RAW_U16) {
     return Error{"unknown depth format " + std::to_string(format)};
   }
-  const size_t expected = static_cast<size_t>(width) * height * 2;
-  if (bytes.size() != expected) {
-    return Error{"raw depth has " + std::to_string(bytes.size()) + " bytes, " +
-                 sizeText(width, height) + " needs " + std::to_string(expected)};
-  }
-  cv::Mat depth(height, width, CV_16UC1);
-  std::memcpy(depth.data, bytes.data(), expected);
+  cv::Mat depth;
+  if (Status copied = copyRaw(bytes, width, height, CV_16UC1, "raw depth", &depth); !copied) return Error{copied.error()};
   return depth;
 }
 
@@ -223,45 +238,56 @@ rgbdslam::rgbd_frame_t toLcm(const RgbdFrame& frame, const FrameEncoding& encodi
 }
 
 Expected<RgbdFrame> fromLcm(const rgbdslam::rgbd_frame_t& msg) {
+  RgbdFrame frame;
+  if (Status converted = fromLcm(msg, &frame); !converted) return Error{converted.error()};
+  return frame;
+}
+
+Status fromLcm(const rgbdslam::rgbd_frame_t& msg, RgbdFrame* frame) {
   if (!validSize(msg.width, msg.height)) return Error{"bad frame size " + sizeText(msg.width, msg.height)};
   for (Status s : {checkCount(msg.colour_size, msg.colour.size(), "colour_size"),
                    checkCount(msg.depth_size, msg.depth.size(), "depth_size"),
                    checkId(msg.seq, "frame sequence number")}) {
     if (!s) return Error{"frame " + std::to_string(msg.seq) + ": " + s.error()};
   }
-  RgbdFrame frame;
-  frame.utime = msg.utime;
-  frame.seq = msg.seq;
-  frame.camera_name = msg.camera_name;
-  frame.depth_scale = msg.depth_scale;
+  frame->utime = msg.utime;
+  frame->seq = msg.seq;
+  frame->camera_name = msg.camera_name;
+  frame->depth_scale = msg.depth_scale;
   if (msg.colour_format == rgbdslam::rgbd_frame_t::COLOUR_RAW_BGR8) {
-    const size_t expected = static_cast<size_t>(msg.width) * msg.height * 3;
-    if (msg.colour.size() != expected) {
-      return Error{"raw colour has " + std::to_string(msg.colour.size()) + " bytes, " +
-                   sizeText(msg.width, msg.height) + " needs " + std::to_string(expected)};
-    }
-    frame.colour = cv::Mat(msg.height, msg.width, CV_8UC3);
-    std::memcpy(frame.colour.data, msg.colour.data(), expected);
+    if (Status s = copyRaw(msg.colour, msg.width, msg.height, CV_8UC3, "raw colour", &frame->colour); !s) return s;
   } else if (msg.colour_format == rgbdslam::rgbd_frame_t::COLOUR_JPEG) {
     auto colour = decodeImage(msg.colour.data(), msg.colour.size(), 3, msg.width, msg.height);
     if (!colour) return Error{"colour: " + colour.error()};
-    frame.colour = *colour;
-  } else if (msg.colour_format != rgbdslam::rgbd_frame_t::COLOUR_NONE) {
+    frame->colour = *colour;
+  } else if (msg.colour_format == rgbdslam::rgbd_frame_t::COLOUR_NONE) {
+    frame->colour.release();
+  } else {
     return Error{"unknown colour format " + std::to_string(msg.colour_format)};
   }
   // A frame carries its depth whole (raw or zlib); the keyframe formats are not for frames.
-  if (msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_RAW_U16 && msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_ZLIB_U16 &&
-      msg.depth_format != rgbdslam::rgbd_frame_t::DEPTH_NONE) {
+  if (msg.depth_format == rgbdslam::rgbd_frame_t::DEPTH_RAW_U16) {
+    if (Status s = copyRaw(msg.depth, msg.width, msg.height, CV_16UC1, "raw depth", &frame->depth); !s) return s;
+  } else if (msg.depth_format == rgbdslam::rgbd_frame_t::DEPTH_ZLIB_U16 ||
+             msg.depth_format == rgbdslam::rgbd_frame_t::DEPTH_NONE) {
+    auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
+    if (!depth) return Error{depth.error()};
+    frame->depth = *depth;
+  } else {
     return Error{"depth format " + std::to_string(msg.depth_format) + " is not a frame's (raw, zlib or none)"};
   }
-  auto depth = decodeDepth(msg.depth_format, msg.depth, msg.width, msg.height, msg.depth_scale);
-  if (!depth) return Error{depth.error()};
-  frame.depth = *depth;
-  if (!frame.depth.empty()) {
+  if (!frame->depth.empty()) {
     if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{s.error()};
   }
-  if (frame.colour.empty() && frame.depth.empty()) return Error{"frame has neither colour nor depth"};
-  return frame;
+  if (frame->colour.empty() && frame->depth.empty()) return Error{"frame has neither colour nor depth"};
+  return Status{};
+}
+
+Status decodeFrame(const void* data, size_t size, rgbdslam::rgbd_frame_t* msg, RgbdFrame* frame) {
+  msg->colour.clear();  // liblcm leaves an array whose count is 0 as it was
+  msg->depth.clear();
+  if (Status decoded = decodeMessage(data, size, msg); !decoded) return decoded;
+  return fromLcm(*msg, frame);
 }
 
 rgbdslam::pose_t toLcm(const PoseEstimate& pose, int64_t map_id) {

@@ -119,6 +119,7 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     Received received = std::move(backlog_.front());
     backlog_.pop_front();
     trackFrame(received);
+    recycle(std::move(received.bytes));
   }
   const auto now = Clock::now();
   while (!pending_maps_.empty() &&
@@ -136,31 +137,42 @@ void TrackerNode::applyOldestMap() {
 void TrackerNode::onFrame(const lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
   last_frame_ = Clock::now();
   while (static_cast<int>(backlog_.size()) >= options_.process.max_backlog_frames) {
+    recycle(std::move(backlog_.front().bytes));
     backlog_.pop_front();  // overtaken before it was tracked
     ++counters_.frames_skipped;
   }
   const auto* data = static_cast<const uint8_t*>(buffer->data);
-  backlog_.push_back(Received{std::vector<uint8_t>(data, data + buffer->data_size), buffer->recv_utime});
+  std::vector<uint8_t> bytes;
+  if (!spare_bytes_.empty()) {
+    bytes = std::move(spare_bytes_.back());
+    spare_bytes_.pop_back();
+  }
+  bytes.assign(data, data + buffer->data_size);  // within the spare's capacity: no allocation
+  backlog_.push_back(Received{std::move(bytes), buffer->recv_utime});
+}
+
+// At most one spare a frame the backlog can hold, and the one being tracked.
+void TrackerNode::recycle(std::vector<uint8_t>&& bytes) {
+  if (static_cast<int>(spare_bytes_.size()) <= options_.process.max_backlog_frames) spare_bytes_.push_back(std::move(bytes));
 }
 
 void TrackerNode::trackFrame(const Received& received) {
   const std::string channel = options_.channels.frame;
-  auto msg = decodeMessage<rgbdslam::rgbd_frame_t>(received.bytes.data(), received.bytes.size());
-  auto frame = msg ? fromLcm(*msg) : Expected<RgbdFrame>(Error{msg.error()});
-  if (!frame) {
+  if (Status decoded = decodeFrame(received.bytes.data(), received.bytes.size(), &frame_msg_, &frame_); !decoded) {
     ++counters_.bad_frame_messages;
-    std::cerr << "rgbd-tracker: ignoring a bad message on " << channel << ": " << frame.error() << "\n";
+    std::cerr << "rgbd-tracker: ignoring a bad message on " << channel << ": " << decoded.error() << "\n";
     return;
   }
+  const RgbdFrame& frame = frame_;
   ++counters_.frames;
-  TrackResult result = tracker_.trackPose(*frame);
-  result.pose.utime = frame->utime;
-  result.pose.seq = frame->seq;
+  TrackResult result = tracker_.trackPose(frame);
+  result.pose.utime = frame.utime;
+  result.pose.seq = frame.seq;
   const bool keyframe_in_pose = result.new_keyframe.has_value();
   if (keyframe_in_pose) sendKeyframe(std::move(*result.new_keyframe));  // frame 0's, or one left unfinished
   if (result.status == TrackResult::Status::kBadFrame) {
     ++counters_.bad_frames;
-    std::cerr << "rgbd-tracker: frame " << frame->seq << " skipped: " << result.error << "\n";
+    std::cerr << "rgbd-tracker: frame " << frame.seq << " skipped: " << result.error << "\n";
     frame_log_.write(result, false);
     return;
   }
@@ -175,11 +187,11 @@ void TrackerNode::trackFrame(const Received& received) {
     std::cerr << "rgbd-tracker: " << event << "\n";
   }
   const int64_t now_us = utimeNow();  // the pose's publication (within microseconds)
-  result.pose.latency_ms = (now_us - frame->utime) * 1e-3;
+  result.pose.latency_ms = (now_us - frame.utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose, map_id_);
   local_->publish(options_.channels.pose, &pose);
   latency_ms_.add(result.pose.latency_ms);
-  arrival_ms_.add((received.recv_utime - frame->utime) * 1e-3);
+  arrival_ms_.add((received.recv_utime - frame.utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
   // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
   const auto start = Clock::now();

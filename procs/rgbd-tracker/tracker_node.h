@@ -117,6 +117,12 @@ class TrackerNode {
     int64_t recv_utime = 0;  // when LCM received it [us]
   };
   std::deque<Received> backlog_;  // frames received, not yet tracked, oldest first
+  // Buffers kept from frame to frame, so that a frame allocates nothing (common/lcm_conversions.h,
+  // decodeFrame): received bytes of frames tracked or skipped, the decoded message, the frame.
+  std::vector<std::vector<uint8_t>> spare_bytes_;
+  rgbdslam::rgbd_frame_t frame_msg_;
+  RgbdFrame frame_;
+  void recycle(std::vector<uint8_t>&& bytes);
   struct PendingMap {
     MapUpdate update;
     Clock::time_point received;

@@ -35,6 +35,44 @@ TEST(LcmConversions, FrameRoundTripIsExactForRawAndZlib) {
   }
 }
 
+// rgbd-tracker decodes every frame into the buffers of the one before (decodeFrame). The
+// second frame must be its own whole: a buffer nothing else holds is reused, one that a
+// keyframe still holds is left to it, and arrays liblcm leaves as they were when their count
+// is 0 (a frame without colour after one with) are not read as the new frame's.
+TEST(LcmConversions, FramesDecodedIntoTheBuffersOfTheOneBefore) {
+  const RgbdFrame first = makeFrame();
+  RgbdFrame second = makeFrame();
+  second.seq = first.seq + 1;
+  second.colour = first.colour.clone() + cv::Scalar(7, 7, 7);
+  second.depth = first.depth.clone() + 11;
+  rgbdslam::rgbd_frame_t msg;
+  RgbdFrame frame;
+  const auto first_bytes = encode(toLcm(first, FrameEncoding{}));  // raw colour, zlib depth
+  FrameEncoding raw;
+  raw.zlib_depth = false;
+  const auto second_bytes = encode(toLcm(second, raw));
+  ASSERT_TRUE(decodeFrame(first_bytes.data(), first_bytes.size(), &msg, &frame));
+  const uchar* colour_buffer = frame.colour.data;
+  const cv::Mat held_depth = frame.depth;  // as a keyframe made from the frame holds it
+  ASSERT_TRUE(decodeFrame(second_bytes.data(), second_bytes.size(), &msg, &frame));
+  EXPECT_EQ(frame.seq, second.seq);
+  EXPECT_EQ(frame.colour.data, colour_buffer) << "nothing else held the colour: its buffer is reused";
+  EXPECT_EQ(cv::norm(frame.colour, second.colour, cv::NORM_INF), 0.0);
+  EXPECT_NE(frame.depth.data, held_depth.data) << "the held depth got a buffer of its own";
+  EXPECT_EQ(cv::norm(frame.depth, second.depth, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(held_depth, first.depth, cv::NORM_INF), 0.0) << "the held depth is still the first frame's";
+
+  RgbdFrame depth_only = second;
+  depth_only.colour.release();
+  const auto third_bytes = encode(toLcm(depth_only, raw));
+  ASSERT_TRUE(decodeFrame(third_bytes.data(), third_bytes.size(), &msg, &frame));
+  EXPECT_TRUE(frame.colour.empty()) << "the frame before's colour is not this frame's";
+  EXPECT_EQ(cv::norm(frame.depth, second.depth, cv::NORM_INF), 0.0);
+
+  const auto bad = encode(toLcm(first, FrameEncoding{}));
+  EXPECT_FALSE(decodeFrame(bad.data(), bad.size() - 1, &msg, &frame)) << "a truncated frame is an error";
+}
+
 TEST(LcmConversions, JpegColourDecodesToTheRightSize) {
   FrameEncoding encoding;
   encoding.jpeg_colour = true;
