@@ -69,6 +69,21 @@ MemoryUsage memoryUsage() {
   return usage;
 }
 
+Status setMallocMmapThreshold(int threshold_kb) {
+  if (threshold_kb == 0) return Status{};
+#if defined(__SANITIZE_ADDRESS__)
+  return Error{"the malloc of AddressSanitizer has no mmap threshold"};
+#else
+  // glibc's own maximum of the dynamic threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64 bits).
+  constexpr int kMaxKb = 32 * 1024;
+  if (threshold_kb < 0 || threshold_kb > kMaxKb || mallopt(M_MMAP_THRESHOLD, threshold_kb * 1024) != 1 ||
+      mallopt(M_TRIM_THRESHOLD, threshold_kb * 1024) != 1) {
+    return Error{"malloc refused an mmap threshold of " + std::to_string(threshold_kb) + " kB"};
+  }
+  return Status{};
+#endif
+}
+
 void printPeakRss() {
   const MemoryUsage usage = memoryUsage();
   if (usage.peak_rss_kb < 0) {

@@ -60,6 +60,22 @@ Status setRealtimePriority(int priority, bool reset_on_fork = true);
 // The calling thread's SCHED_FIFO or SCHED_RR priority; 0 under a normal policy.
 int realtimePriority();
 
+// Large blocks (at least 'threshold_kb' [kB]) from their own mappings, given back to the
+// system when freed, and an arena's free top beyond as much given back too (glibc's
+// M_MMAP_THRESHOLD and M_TRIM_THRESHOLD, fixed; a large block still reuses free space an
+// arena holds). glibc starts at 128 kB but raises the threshold to the largest mapped block
+// freed so far, up to 32 MB: in the tracker a frame's LCM buffer (1.5 MB) within its first
+// second, after which frames, images and pyramids come from the threads' arenas, whose
+// freed memory stays resident. Fixing it trades latency for memory, so it is the option
+// tracker_node.malloc_mmap_threshold_kb, 0 (glibc's dynamic threshold) by default. Measured
+// through the suite (docs/open_work.md, session 24): at 128 kB the corridor's tracker peak
+// 105 -> 95 MB for a median latency 2.9 -> 3.8 ms (a fresh mapping is page faults: LCM's
+// 1.5 MB buffer of each frame alone costs about 0.8 ms); the ten-minute flight's peak
+// 132 -> 116 MB and 3.3 -> 2.5 MB a minute, for 0.7 ms more per tracked frame, 6 ms more
+// per lost one and twice the frames skipped. An error when the allocator refuses (above
+// 32 MB, or not glibc's: AddressSanitizer's has no threshold). 0 changes nothing.
+Status setMallocMmapThreshold(int threshold_kb);
+
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);
 

@@ -29,6 +29,10 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "for a core while the mapper, the capture or other software runs (needs root, CAP_SYS_NICE "
           "or RLIMIT_RTPRIO; refused: a warning, normal priority); LCM's receive threads, which carry "
           "its frames, too; the encoder and keyframe worker at the normal priority (0: normal priority)");
+  r->bind(s, "malloc_mmap_threshold_kb", &malloc_mmap_threshold_kb, 0, 32768, "kB",
+          "blocks of at least this size (frames, images) get their own memory mappings, given back to the "
+          "system when freed: less resident memory for more latency (128: about 10-16 MB less, 0.7-0.9 ms more "
+          "per tracked frame; common/process.h) (0: glibc's default, a threshold that rises to the largest block freed)");
   r->bind(s, "keyframe_grey", &keyframe_encoding.jpeg_grey, {{"jpeg", true}, {"png", false}},
           "keyframe image on the link (png is lossless)");
   r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",

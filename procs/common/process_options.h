@@ -35,6 +35,10 @@ struct TrackerProcessOptions {
   // its cores with whatever else runs; the onboard scripts (scripts/run-onboard,
   // scripts/bench-suite) set it.
   int realtime_priority = 0;
+  // Blocks of at least this size get their own mappings, given back when freed
+  // (common/process.h, setMallocMmapThreshold: memory for latency); 0: glibc's dynamic
+  // threshold [kB].
+  int malloc_mmap_threshold_kb = 0;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
   // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma

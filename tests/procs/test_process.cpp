@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <malloc.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -74,6 +77,49 @@ TEST(RealtimePriority, APriorityOutsideTheRangeIsAnError) {
     EXPECT_NE(set.error().find("outside SCHED_FIFO's 1-99"), std::string::npos) << set.error();
   }
   EXPECT_EQ(realtimePriority(), 0);
+}
+
+// In a child process that runs this test alone ("threadsafe": the binary again), so that the
+// test binary keeps glibc's defaults and no free block left by other tests serves the 1 MB. First what the option
+// is for: glibc's threshold rises to a freed 2 MB block, and the next 1 MB block comes from
+// the arena (exit 1 if not: then this glibc behaves otherwise and the test says so); with
+// the threshold fixed at 128 kB the arena gives its free top back, and the next 1 MB block
+// gets its own mapping again (exit 2 if not).
+TEST(MallocMmapThreshold, LargeBlocksGetTheirOwnMappingsAgain) {
+#if defined(__SANITIZE_ADDRESS__)
+  EXPECT_FALSE(setMallocMmapThreshold(128));
+  GTEST_SKIP() << "AddressSanitizer's malloc has no mmap threshold: the refusal was checked";
+#else
+  auto mapped_blocks_with = [](size_t bytes) {
+    [[maybe_unused]] static void* volatile escaped;  // so that the compiler cannot leave malloc and free out
+    char* block = static_cast<char*>(std::malloc(bytes));
+    escaped = block;
+    std::memset(block, 1, bytes);
+    const size_t mapped = mallinfo2().hblks;
+    std::free(block);
+    return mapped;
+  };
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        const size_t none = mallinfo2().hblks;
+        (void)mapped_blocks_with(2u << 20);  // freed: glibc's threshold rises to 2 MB
+        if (mapped_blocks_with(1u << 20) != none) std::exit(1);
+        if (!setMallocMmapThreshold(128)) std::exit(3);
+        (void)mapped_blocks_with(1u << 20);  // from the arena's free top, which its free gives back
+        std::exit(mapped_blocks_with(1u << 20) == none + 1 ? 0 : 2);
+      },
+      testing::ExitedWithCode(0), "");
+#endif
+}
+
+TEST(MallocMmapThreshold, ZeroKeepsTheDefaultAndAnOutOfRangeThresholdIsAnError) {
+  EXPECT_TRUE(setMallocMmapThreshold(0));
+  for (int kb : {-1, 40000}) {
+    const Status set = setMallocMmapThreshold(kb);
+    ASSERT_FALSE(set) << kb;
+    EXPECT_NE(set.error().find("mmap threshold"), std::string::npos) << set.error();
+  }
 }
 
 }  // namespace
