@@ -55,7 +55,17 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
     : local_(local), link_(link), options_(std::move(options)),
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
       sync_(map_id, options_.sync.outbox), budget_(options_.process.link_budget),
-      ladder_(encodingLadder(options_.process.bestEncoding(), options_.process.link_budget.min_jpeg_quality)) {}
+      ladder_(encodingLadder(options_.process.bestEncoding(), options_.process.link_budget.min_jpeg_quality)) {
+  if (tracker_options.local_map.store_dir.empty()) return;  // all in memory
+  Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(tracker_options.local_map.store_dir);
+  if (!store) {
+    std::cerr << "rgbd-tracker: warning: unacknowledged keyframes stay in memory: " << store.error() << "\n";
+    return;
+  }
+  outbox_store_ = std::move(*store);
+  outbox_spill_ = std::make_unique<StoreSpill>(outbox_store_.get());
+  sync_.setSpill(outbox_spill_.get());
+}
 
 void TrackerNode::startFrom(const LoadedMap& map, bool localise_only) {
   tracker_.load(map, !localise_only);
@@ -340,6 +350,8 @@ void TrackerNode::publishStatus() {
                      {"keyframes", c.keyframes},
                      {"keyframes_acked", keyframesAcked()},
                      {"keyframes_unacked", static_cast<int64_t>(keyframesUnacked())},
+                     {"keyframes_unacked_stored", static_cast<int64_t>(sync_.outbox().spilled())},
+                     {"keyframes_unacked_lost", sync_.outbox().spillErrors()},
                      {"keyframe_sends", c.keyframe_sends},
                      {"mapper_losses", sync_.mapperLosses()},
                      {"keyframe_bytes", c.keyframe_bytes},
@@ -418,8 +430,10 @@ void TrackerNode::printSummary() const {
   }
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
-  std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframe_sends %ld\nkeyframe_bytes %ld\n",
-              c.keyframes, keyframesAcked(), keyframesUnacked(), c.keyframe_sends, c.keyframe_bytes);
+  std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframes_unacked_lost %lld\n"
+              "keyframe_sends %ld\nkeyframe_bytes %ld\n",
+              c.keyframes, keyframesAcked(), keyframesUnacked(), static_cast<long long>(sync_.outbox().spillErrors()),
+              c.keyframe_sends, c.keyframe_bytes);
   std::printf("link_budget_kbps %.0f\nlink_bytes %lld\nlink_bytes_received %lld\nkeyframes_coarser %ld\n"
               "keyframes_over_budget %ld\n",
               options_.process.link_budget.kbps, static_cast<long long>(budget_.bytesSent()),

@@ -37,6 +37,7 @@
 #include "common/loss_report.h"
 #include "common/process_options.h"
 #include "common/samples.h"
+#include "common/store_spill.h"
 #include "rgbdslam/map/map_file.h"
 #include "rgbdslam/sync/sync_options.h"
 #include "rgbdslam/sync/tracker_sync.h"
@@ -98,6 +99,10 @@ class TrackerNode {
   Tracker tracker_;
   int64_t map_id_;
 
+  // Unacknowledged keyframes beyond sync.unacked_in_memory (common/store_spill.h); before
+  // sync_, which drops what it spilled when it goes.
+  std::unique_ptr<KeyframeStore> outbox_store_;
+  std::unique_ptr<StoreSpill> outbox_spill_;
   TrackerSync<std::vector<uint8_t>> sync_;  // the encoded keyframe_t of each unacknowledged keyframe
   std::map<KeyframeId, Clock::time_point> created_;  // keyframes not yet in an applied map
   LinkBudget budget_;

@@ -43,7 +43,11 @@ kill -INT "$ONBOARD_LOG"; wait "$ONBOARD_LOG" || true
 split_report "$WORK/clean" clean "$frames"
 
 dir=$WORK/outage
+# Unacknowledged keyframes beyond the oldest (the one re-sent) wait on storage
+# (sync.unacked_in_memory, common/store_spill.h), so the outage exercises the spill.
+SPLIT_TRACKER_ARGS=(--set sync.unacked_in_memory=0,sync.resend_max=1)
 split_start "$dir" 0
+SPLIT_TRACKER_ARGS=()
 onboard_log "$dir"
 (
   sleep 6
@@ -81,6 +85,11 @@ kf_out_n=$(wc -w <<< "$kf_out")
 $LCMLOG maps "$dir/link.lcm" > "$dir/maps.txt"
 $LCMLOG status "$dir/link.lcm" SLAM_STATUS > "$dir/tracker-status.txt"
 final_status_utime=$(awk '$2 == "rgbd-tracker"' "$dir/tracker-status.txt" | tail -1 | awk '{print $1}')
+# The most keyframes waiting, and waiting on storage, in one status (onboard, 1 Hz).
+read -r most_unacked most_stored <<< "$($LCMLOG status "$dir/onboard.lcm" SLAM_STATUS | awk '$2 == "rgbd-tracker" {
+  for (i = 3; i <= NF; ++i) { split($i, kv, "="); if (kv[1] == "keyframes_unacked" && kv[2] + 0 > u + 0) u = kv[2] + 0;
+                               if (kv[1] == "keyframes_unacked_stored" && kv[2] + 0 > s + 0) s = kv[2] + 0 } }
+  END { print u + 0, s + 0 }')"
 [ -n "$final_status_utime" ] || fail "no SLAM_STATUS of the tracker in the link log"
 read -r mapper_v_at mapper_acked_at <<< "$(awk -v u="$final_status_utime" '$1 <= u {v = $3; a = $6} END {print v, a}' "$dir/maps.txt")"
 mapper_v_before=$(awk -v u="$final_status_utime" '$1 <= u - 500000 {v = $3} END {print v}' "$dir/maps.txt")
@@ -98,6 +107,7 @@ echo "agreement: tracker map_version $tv newest seen $tnewest; mapper at the tra
      "tracker keyframes $kfs; mapper summary: version $(split_value mapper_version "$m"), keyframes" \
      "$(split_value mapper_keyframes "$m"), snapshots $(split_value mapper_snapshots "$m");" \
      "tracker maps_missing_delta $(split_value maps_missing_delta "$t") maps_stale $(split_value maps_stale "$t")"
+echo "keyframes waiting at most (1 Hz status): $most_unacked, on storage $most_stored; lost from storage: $(split_value keyframes_unacked_lost "$t")"
 echo "ATE clean $clean_ate m, with the outage $ate m; tracker exit status $(cat "$dir/tracker.exit"); test time $((SECONDS - t_test)) s"
 
 # The clean run has to be sound for the comparison to mean anything.
@@ -111,6 +121,9 @@ awk -v p="$vouched_in" -v n="$gt_in" 'BEGIN { exit !(p >= 0.9 * n) }' \
 [ "$kfs" -gt 0 ] || fail "no keyframes"
 [ "$(split_value keyframes_unacked "$t")" = 0 ] || fail "keyframes left unacknowledged: $(tr '\n' ' ' < "$t")"
 [ "$(split_value keyframes_acked "$t")" = "$kfs" ] || fail "$(split_value keyframes_acked "$t") of $kfs keyframes acknowledged"
+[ "$most_unacked" -lt 2 ] || [ "$most_stored" -ge 1 ] \
+  || fail "$most_unacked keyframes waited at once, none on storage (sync.unacked_in_memory=0)"
+[ "$(split_value keyframes_unacked_lost "$t")" = 0 ] || fail "keyframes lost from storage"
 [ "$(cat "$dir/tracker.exit")" = 0 ] || fail "the tracker exited with $(cat "$dir/tracker.exit") (keyframes unacknowledged)"
 [ "$tv" = "$tnewest" ] || fail "the tracker ends on map version $tv but has seen $tnewest"
 [ -n "$mapper_v_at" ] || fail "no SLAM_MAP in the link log before the tracker's final status"

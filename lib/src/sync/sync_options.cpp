@@ -12,6 +12,9 @@ void SyncOptions::bind(OptionRegistry* r) {
           "tracker: only the oldest this many unacknowledged keyframes are re-sent (the others as those are acknowledged)");
   r->bind(s, "retained_keyframes", &outbox.retained, 0, 100000, "keyframes",
           "tracker: acknowledged keyframes kept for a mapper whose journal lost them (rgbd-tracker; a keyframe on the link is about 30 kB)");
+  r->bind(s, "unacked_in_memory", &outbox.in_memory, 0, 100000, "keyframes",
+          "tracker: unacknowledged keyframes kept in memory at most; the newer wait on storage under "
+          "tracker.local_map_store_dir (a link outage piles them up; rgbd-tracker; none on storage when that is empty)");
   r->bind(s, "receipt_period_s", &receipt_period_s, 1e-3, 3600.0, "s",
           "tracker: a map receipt (the version it holds) this often");
   r->bind(s, "max_queued_keyframes", &mapper.max_queued_keyframes, 1, 100000, "keyframes",

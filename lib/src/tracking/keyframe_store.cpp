@@ -81,7 +81,7 @@ bool KeyframeStore::put(KeyframeId id, Kind kind, const std::vector<uint8_t>& by
 Expected<std::vector<uint8_t>> KeyframeStore::get(KeyframeId id, Kind kind) {
   const auto it = index_.find(key(id, kind));
   const std::string what = "keyframe store: keyframe " + std::to_string(id) +
-                           (kind == Kind::kImage ? " image" : " extras");
+                           (kind == Kind::kImage ? " image" : kind == Kind::kExtras ? " extras" : " message");
   if (it == index_.end()) return Error{what + ": not stored"};
   const Entry entry = it->second;
   std::vector<uint8_t> bytes(static_cast<size_t>(entry.size));
@@ -108,8 +108,7 @@ Expected<std::vector<uint8_t>> KeyframeStore::get(KeyframeId id, Kind kind) {
 }
 
 void KeyframeStore::remove(KeyframeId id) {
-  remove(id, Kind::kImage);
-  remove(id, Kind::kExtras);
+  for (Kind kind : {Kind::kImage, Kind::kExtras, Kind::kMessage}) remove(id, kind);
 }
 
 void KeyframeStore::remove(KeyframeId id, Kind kind) {

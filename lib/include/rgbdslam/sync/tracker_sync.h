@@ -84,6 +84,7 @@ class TrackerSync {
   // Times a mapper was seen to have lost acknowledged keyframes.
   long mapperLosses() const { return mapper_losses_; }
   const KeyframeOutbox<Message>& outbox() const { return outbox_; }
+  void setSpill(OutboxSpill<Message>* spill) { outbox_.setSpill(spill); }  // KeyframeOutbox::setSpill
   const MapFollower& follower() const { return follower_; }
 
  private:

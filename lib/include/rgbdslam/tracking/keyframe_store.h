@@ -32,7 +32,9 @@ namespace rgbdslam {
 
 class KeyframeStore {
  public:
-  enum class Kind : uint8_t { kImage = 0, kExtras = 1 };
+  // kMessage: an unacknowledged keyframe's message on the link (rgbd-tracker's outbox,
+  // procs/common/store_spill.h), in a store of its own.
+  enum class Kind : uint8_t { kImage = 0, kExtras = 1, kMessage = 2 };
 
   // An error names the directory and the system's reason (missing, not writable).
   static Expected<std::unique_ptr<KeyframeStore>> open(const std::string& directory);
@@ -48,7 +50,8 @@ class KeyframeStore {
   // The bytes as put; an error if there is no entry, the read fails or the bytes changed
   // (then the entry goes: the error is counted once, not on every later try).
   Expected<std::vector<uint8_t>> get(KeyframeId id, Kind kind);
-  void remove(KeyframeId id);  // both kinds
+  void remove(KeyframeId id);  // every kind
+  void remove(KeyframeId id, Kind kind);
   void clear();
 
   size_t entries() const { return index_.size(); }
@@ -66,10 +69,10 @@ class KeyframeStore {
     uint32_t crc = 0;
   };
   explicit KeyframeStore(int fd) : fd_(fd) {}
+  static constexpr size_t kKinds = 3;
   static uint64_t key(KeyframeId id, Kind kind) {
-    return static_cast<uint64_t>(id) * 2 + static_cast<uint8_t>(kind);  // ids are >= 0
+    return static_cast<uint64_t>(id) * kKinds + static_cast<uint8_t>(kind);  // ids are >= 0
   }
-  void remove(KeyframeId id, Kind kind);
   void release(const Entry& entry);
 
   int fd_ = -1;
@@ -79,7 +82,7 @@ class KeyframeStore {
   int64_t errors_ = 0;
   bool full_ = false;
   bool in_memory_ = false;
-  std::array<size_t, 2> kind_entries_{};
+  std::array<size_t, kKinds> kind_entries_{};
   std::unordered_map<uint64_t, Entry> index_;
 };
 
