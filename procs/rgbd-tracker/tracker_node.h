@@ -71,8 +71,11 @@ class TrackerNode {
   // were left unacknowledged.
   int run(const std::atomic<bool>& stop);
   void printSummary() const;
-  // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once).
-  long keyframesAcked() const { return counters_.keyframes - static_cast<long>(keyframesUnacked()); }
+  // Keyframes made and acknowledged (a keyframe the mapper lost and got again counts once;
+  // one lost from the outbox's storage does not count).
+  long keyframesAcked() const {
+    return counters_.keyframes - static_cast<long>(keyframesUnacked()) - static_cast<long>(sync_.outbox().spillErrors());
+  }
   // Sent and not yet acknowledged, waiting for the budget, or being encoded.
   size_t keyframesUnacked() const { return sync_.outbox().size() + encoding_.size(); }
 

@@ -58,6 +58,41 @@ TEST(StoreSpill, AnOutageKeepsFewKeyframesInMemoryAndLosesNone) {
   EXPECT_EQ(*again[0], messageOf(90));
 }
 
+// The mapper got the first send of keyframes that were then spilled: acknowledged straight
+// from storage, the newest 'retained' read back for a mapper that may lose them, the rest
+// dropped; nothing is left on storage, also when the outbox goes.
+TEST(StoreSpill, SpilledKeyframesAcknowledgedDirectlyLeaveNothingOnStorage) {
+  test::TempDir dir;
+  auto store = KeyframeStore::open(dir.path());
+  ASSERT_TRUE(store) << store.error();
+  StoreSpill spill(store->get());
+  for (int retained : {3, 0}) {
+    KeyframeOutboxOptions options;
+    options.in_memory = 2;
+    options.retained = retained;
+    {
+      KeyframeOutbox<std::vector<uint8_t>> outbox(options);
+      outbox.setSpill(&spill);
+      for (KeyframeId id = 0; id < 10; ++id) outbox.sent(id, messageOf(id), 0);
+      outbox.sent(9, messageOf(9), 0);  // the same keyframe again: replaced, not doubled
+      ASSERT_EQ(outbox.spilled(), 8u);
+      ASSERT_EQ((*store)->entries(), 8u);
+      (void)outbox.acknowledgeBelow(8, kS);
+      EXPECT_EQ((*store)->entries(), 2u) << "keyframes 8 and 9 still wait there";
+      EXPECT_EQ(outbox.inMemory(), 0u);
+      EXPECT_EQ(outbox.spillErrors(), 0);
+      EXPECT_EQ(outbox.resendFrom(5, kS), retained) << "retained " << retained;
+      if (retained > 0) {
+        const auto due = outbox.resendsDue(kS);
+        ASSERT_EQ(due.size(), 2u);
+        EXPECT_EQ(*due[0], messageOf(5));
+        EXPECT_EQ(*due[1], messageOf(6));
+      }
+    }
+    EXPECT_EQ((*store)->entries(), 0u) << "the outbox took its spilled keyframes with it (retained " << retained << ")";
+  }
+}
+
 // Storage that returns other bytes loses that keyframe (counted), not the others.
 TEST(StoreSpill, AKeyframeTheStorageCannotGiveBackIsCountedAndSkipped) {
   test::TempDir dir;

@@ -22,7 +22,7 @@
 // a link outage the unacknowledged grow by one per keyframe (on the ten-minute flight about
 // 65 a minute of 30 kB each); with a spill (setSpill) at most 'in_memory' of them stay in
 // memory, the newest wait in the spill (rgbd-tracker: the flight computer's storage,
-// outbox_spill.h), and each is read back when it is among the oldest resend_max, which are
+// procs/common/store_spill.h), and each is read back when it is among the oldest resend_max, which are
 // the ones sent. A spill that refuses a message (storage full) leaves it in memory: a
 // keyframe is never dropped for memory. A message the spill cannot give back (a read error,
 // other bytes) is lost: counted (spillErrors), and the mapper skips it as it skips what
@@ -30,6 +30,7 @@
 // Threads: not thread-safe; one thread calls everything.
 #include <algorithm>
 #include <cstdint>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <utility>
@@ -116,15 +117,24 @@ class KeyframeOutbox {
 
   // Drops every waiting keyframe with an id below 'below'; returns, for each one dropped,
   // the time from its first send to now [s] (the acknowledgement latency).
+  // Of those, only the newest 'retained' are kept (a spilled one read back for it; one the
+  // spill cannot give back is not retained, and not lost: the mapper has it).
   std::vector<double> acknowledgeBelow(KeyframeId below, int64_t now_us) {
     std::vector<double> ages_s;
-    for (auto it = entries_.begin(); it != entries_.end() && it->first < below; it = entries_.erase(it)) {
+    const auto end = entries_.lower_bound(below);
+    const auto acknowledged = std::distance(entries_.begin(), end);
+    auto not_kept = acknowledged - std::max(options_.retained, 0);  // the oldest of them
+    for (auto it = entries_.begin(); it != end; it = entries_.erase(it), --not_kept) {
       ages_s.push_back((now_us - it->second.first_sent_us) * 1e-6);
-      if (options_.retained <= 0) {
+      if (not_kept > 0) {
         forget(it->first, &it->second);
         continue;
       }
-      if (it->second.spilled && !unspill(it->first, &it->second)) continue;
+      if (it->second.spilled) {
+        std::optional<Message> message = spill_->take(it->first);
+        if (message) retained_[it->first] = std::move(*message);
+        continue;
+      }
       --in_memory_;
       retained_[it->first] = std::move(it->second.message);
     }
