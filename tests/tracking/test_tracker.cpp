@@ -103,6 +103,12 @@ TEST(Tracker, RetriesWithoutCoarseStageOnPoorOrDroppedQuality) {
   options.coarse.retry_quality_ratio = 0.6;
   EXPECT_FALSE(coarseRetryWanted(options, 0.25, 0.81));
   EXPECT_FALSE(coarseRetryWanted(options, 0.38, 0.81));
+  // The other way round, after a frame tracked without a coarse stage (retry_with).
+  EXPECT_TRUE(coarseRetryWanted(options, 0.25, 0.81, false));
+  EXPECT_TRUE(coarseRetryWanted(options, 0.38, 0.81, false));
+  EXPECT_FALSE(coarseRetryWanted(options, 0.5, 0.8, false));
+  options.coarse.retry_with = false;
+  EXPECT_FALSE(coarseRetryWanted(options, 0.25, 0.81, false));
 }
 
 TEST(Tracker, RejectsBadFramesAndInitialisesFromDepth) {

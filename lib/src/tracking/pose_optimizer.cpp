@@ -105,7 +105,8 @@ PoseUncertainty poseUncertainty(const Eigen::Matrix<double, 6, 6>& information) 
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,
                                  const PoseOptimizerOptions& options,
-                                 std::vector<uint8_t>* inlier, const ScalarResiduals* extra) {
+                                 std::vector<uint8_t>* inlier, const ScalarResiduals* extra,
+                                 const PosePrior* prior) {
   PoseOptimizerResult result;
   result.T_c_w = T_c_w_start;
   if (inlier) inlier->assign(observations.size(), 0);
@@ -168,10 +169,17 @@ PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_s
     // reported stays undamped, so the uncertainty says what is unfixed.
     Eigen::Matrix<double, 6, 6> H_solve = H;
     if (extra) H_solve.diagonal().array() += kExtraDamping * std::max(1.0, H.trace() / 6.0);
+    Eigen::Matrix<double, 6, 1> b_solve = b;
+    if (prior) {
+      // (r0 + xi)^T L (r0 + xi), r0 = log(T T_prior^-1): to first order in xi.
+      const Vec6 r0 = (result.T_c_w * prior->T_c_w.inverse()).log();
+      H_solve += prior->information;
+      b_solve.noalias() += prior->information * r0;
+    }
     const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(H_solve);
     if (solver.info() != Eigen::Success) return result;
     // Minimise sum w |r + J xi|^2: J^T W J xi = -J^T W r.
-    const Vec6 xi = solver.solve(-b);
+    const Vec6 xi = solver.solve(-b_solve);
     if (!xi.allFinite()) return result;
     result.T_c_w = SE3::exp(xi) * result.T_c_w;
     result.iterations = iteration + 1;

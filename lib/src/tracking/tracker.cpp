@@ -58,6 +58,7 @@ struct Attempt {
   double median_depth_m = 0.0;  // of the found inliers
   bool did_coarse = false;      // the coarse stage ran
   PoseUncertainty uncertainty;  // of the fine stage's pose (infinite when it failed)
+  Mat6 information = Mat6::Zero();  // the measurements' J^T W J it comes from (motion_prior.h)
   bool depth_aided = false;     // the pose fit included point-to-plane against depth
 };
 
@@ -75,6 +76,8 @@ struct KeyframeExtras {
 // as this process holds them (the store's file dies with the process).
 constexpr char kExtrasMagic[4] = {'R', 'G', 'X', '1'};
 constexpr size_t kDescriptorBytes = 32;
+// The first pose is the map's origin by definition: known exactly (1 um, 1 urad).
+constexpr double kFirstPoseInformation = 1e12;
 
 template <typename T>
 void appendRaw(const T* data, size_t count, std::vector<uint8_t>* out) {
@@ -143,11 +146,17 @@ double median(std::vector<double>* values) {
   return *middle;
 }
 
+// A result worth a second attempt: with the other choice of coarse stage, or from another
+// prediction (MotionOptions::retry_without_sbi).
+bool poorResult(const TrackerOptions& options, double quality, double last_quality) {
+  return quality < options.quality.good || quality < options.coarse.retry_quality_ratio * last_quality;
+}
+
 }  // namespace
 
-bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality) {
-  return options.coarse.retry_without &&
-         (quality < options.quality.good || quality < options.coarse.retry_quality_ratio * last_quality);
+bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality, bool did_coarse) {
+  return (did_coarse ? options.coarse.retry_without : options.coarse.retry_with) &&
+         poorResult(options, quality, last_quality);
 }
 
 class Tracker::Impl {
@@ -155,7 +164,7 @@ class Tracker::Impl {
   Impl(const PinholeCamera& camera, const TrackerOptions& options, SlamMode mode, int64_t map_id)
       : camera_(camera), options_(options), pose_options_(poseOptions(options, mode)),
         mode_(mode), map_id_(map_id), rng_(static_cast<uint32_t>(options.random_seed)),
-        replica_(camera) {
+        replica_(camera), motion_prior_(options.motion_prior) {
     // Nothing goes cold without a local map, so no store either.
     if (options.local_map.store_dir.empty() || options.local_map.keyframes <= 0) return;
     Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(options.local_map.store_dir);
@@ -230,6 +239,7 @@ class Tracker::Impl {
     state_ = TrackingState::kInitialising;
     T_c_w_ = SE3();
     velocity_.setZero();
+    motion_prior_.clear();
     lost_velocity_.setZero();
     lost_frames_ = 0;
     last_pose_utime_.reset();
@@ -262,7 +272,7 @@ class Tracker::Impl {
   // image (found or not, hot or cold source).
   std::vector<int> points_in_view_;
   TrackResult trackNormally(const RgbdFrame& frame);
-  SE3 predictPose() const;
+  SE3 predictPose(bool use_sbi) const;
   // Coarse stage: kIfMoving when the start pose predicts image motion (coarseWanted),
   // kAlways when the motion is unknown (relocalisation), kNever for the fine-only retry.
   enum class Coarse { kIfMoving, kAlways, kNever };
@@ -389,6 +399,12 @@ class Tracker::Impl {
   TrackingState state_ = TrackingState::kInitialising;
   SE3 T_c_w_;          // last good pose
   Vec6 velocity_ = Vec6::Zero();  // log of the last inter-frame motion (left, on T_c_w)
+  // The constant-velocity prior of the pose fit (motion_prior.h), and the prior of the frame
+  // being tracked (none while relocalising: a candidate's pose is not where the motion went).
+  MotionPrior motion_prior_;
+  std::optional<PosePrior> prior_;
+  std::vector<PoseObservation> inlier_observations_;  // runStage's fit without the prior
+  std::vector<size_t> inlier_index_;
   // While lost: the velocity when tracking was lost, and the frames lost since (a vehicle
   // does not stop when its tracker loses it: relocalise() tries where it coasted to).
   Vec6 lost_velocity_ = Vec6::Zero();
@@ -505,7 +521,11 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   TrackResult tracked;
   if (replica_.map().numKeyframes() == 0) tracked = initialise(frame);
   else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
-  else tracked = trackNormally(frame);
+  else {
+    prior_ = motion_prior_.predict(frame.utime);
+    tracked = trackNormally(frame);
+    prior_.reset();
+  }
   std::swap(previous_sbi_, sbi_);
   have_previous_sbi_ = true;
   tracked.inconsistent = frame_inconsistent_;
@@ -617,6 +637,7 @@ TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   T_c_w_ = SE3();
   last_pose_utime_ = frame.utime;
   velocity_.setZero();
+  motion_prior_.reset(frame.utime, T_c_w_, kFirstPoseInformation * Mat6::Identity());
   state_ = TrackingState::kTracking;
   result.status = TrackStatus::kInitialised;
   result.pose.state = TrackingState::kTracking;
@@ -646,12 +667,13 @@ void Tracker::Impl::load(const LoadedMap& loaded, bool add_keyframes) {
   keyframes_allowed_ = add_keyframes;
   if (loaded.keyframes.empty()) return;  // nothing to localise in: initialise as usual
   T_c_w_ = loaded.keyframes.front().T_w_c.inverse();
+  motion_prior_.clear();
   state_ = TrackingState::kLost;
 }
 
-SE3 Tracker::Impl::predictPose() const {
+SE3 Tracker::Impl::predictPose(bool use_sbi) const {
   Vec6 xi = options_.motion.velocity_damping * velocity_;
-  if (options_.motion.use_sbi_rotation && have_previous_sbi_) {
+  if (use_sbi && have_previous_sbi_) {
     // PTAM: the SBI rotation replaces the rotational velocity, and sideways translation
     // (which the SBI alignment has already explained as rotation) is dropped.
     const SE3 T_old_new =
@@ -664,7 +686,8 @@ SE3 Tracker::Impl::predictPose() const {
 }
 
 TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
-  const SE3 predicted = predictPose();
+  const bool use_sbi = options_.motion.use_sbi_rotation && have_previous_sbi_;
+  const SE3 predicted = predictPose(use_sbi);
   Attempt attempt = trackFrom(predicted, frame);
   // The coarse stage fits a few dozen matches at the coarsest levels, where fine texture
   // gives many wrong ones; now and then they pull the pose off, and the fine stage, which
@@ -672,8 +695,11 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // therefore compared with the fine stage alone from the prediction, and the attempt that
   // explains more of its searched points is kept. So is one whose quality dropped sharply
   // from the last frame's (CoarseStageOptions::retry_quality_ratio).
-  if (attempt.did_coarse && coarseRetryWanted(options_, attempt.quality, last_quality_)) {
-    attempt = betterOf(attempt, predicted, frame, Coarse::kNever);
+  if (coarseRetryWanted(options_, attempt.quality, last_quality_, attempt.did_coarse)) {
+    attempt = betterOf(attempt, predicted, frame, attempt.did_coarse ? Coarse::kNever : Coarse::kAlways);
+  }
+  if (use_sbi && options_.motion.retry_without_sbi && poorResult(options_, attempt.quality, last_quality_)) {
+    attempt = betterOf(attempt, predictPose(false), frame, Coarse::kIfMoving);
   }
   if (depthAidWanted(attempt, frame)) attempt = alignWithDepth(attempt, frame);
   if (isLost(attempt)) return lostResult(attempt, lossReason(attempt), false);
@@ -920,14 +946,15 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   // rotation: an image that shows nothing (a plain wall, the lights out) misleads that
   // rotation estimate, and the attempt's few points may not have corrected it.
   PoseOptimizerResult fit =
-      optimisePose(camera_, attempt.T_c_w, observations_, pose_options_, &inliers_, &planes);
+      optimisePose(camera_, attempt.T_c_w, observations_, pose_options_, &inliers_, &planes, prior_ ? &*prior_ : nullptr);
   // The information the surfaces really give (honestInformation) replaces theirs in the fit's.
   Eigen::Matrix<double, 6, 6> surfaces_excess =
       fit.extra_information - planes.honestInformation(fit.extra_information, o.effective_samples, fit.inliers_extra);
   const SE3 velocity_start = SE3::exp(options_.motion.velocity_damping * velocity_) * T_c_w_;
   std::vector<uint8_t> other_inliers;
   const PoseOptimizerResult other =
-      optimisePose(camera_, velocity_start, observations_, pose_options_, &other_inliers, &planes);
+      optimisePose(camera_, velocity_start, observations_, pose_options_, &other_inliers, &planes,
+                   prior_ ? &*prior_ : nullptr);
   if (other.ok && (!fit.ok || other.inliers_extra + other.inliers_2d > fit.inliers_extra + fit.inliers_2d)) {
     fit = other;
     inliers_.swap(other_inliers);
@@ -948,6 +975,7 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   Attempt aligned = attempt;
   aligned.T_c_w = fit.T_c_w;
   aligned.uncertainty = poseUncertainty(fit.information - surfaces_excess);
+  aligned.information = fit.information - surfaces_excess;
   aligned.depth_aided = true;
   aligned.found = 0;
   depths_.clear();
@@ -1090,6 +1118,9 @@ void Tracker::Impl::followMapCorrection() {
   const SE3 old_published = published(old_pose);
   const SE3 new_pose = correction * old_pose;
   if (options_.follow_map_corrections) T_c_w_ = new_pose.inverse();
+  // The prior follows the map either way: the next fit finds the pose in the moved map, and
+  // the map's move is not the vehicle's.
+  motion_prior_.moveWorld(correction);
   if (depth_reference_) depth_reference_->T_w_c = correction * depth_reference_->T_w_c;
   offset_.position = old_published.translation() - new_pose.translation();
   offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
@@ -1162,6 +1193,7 @@ TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason
   uncertain_frames_ = 0;
   lost_frames_ = 1;  // this frame: the first relocalisation is two frames past the last pose
   velocity_.setZero();
+  motion_prior_.clear();
   last_quality_ = 0.0;
   depth_reference_.reset();
   TrackResult result;
@@ -1230,6 +1262,8 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
                                   TrackingState state, std::optional<TrackingState> grade) {
   const TrackingState keyframe_grade = grade.value_or(state);
   if (state != TrackingState::kRelocalised) velocity_ = (attempt.T_c_w * T_c_w_.inverse()).log();
+  if (state == TrackingState::kRelocalised) motion_prior_.reset(frame.utime, attempt.T_c_w, attempt.information);
+  else motion_prior_.update(frame.utime, attempt.T_c_w, attempt.information);
   T_c_w_ = attempt.T_c_w;
   last_pose_utime_ = frame.utime;
   last_quality_ = attempt.quality;
@@ -1334,6 +1368,7 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
   Attempt attempt;
   attempt.T_c_w = T_c_w;
   attempt.uncertainty = poseUncertainty(fine_information_);
+  attempt.information = fine_information_;
   attempt.did_coarse = did_coarse;
   depths_.clear();
   int reliable_searched = 0, reliable_found = 0;
@@ -1387,8 +1422,26 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
     observations_.push_back({slot->point->p_w, slot->found_uv, slot->found_level, depth});
     found.push_back(slot);
   }
-  const PoseOptimizerResult fit =
-      optimisePose(camera_, T_c_w, observations_, pose_options_, &inliers_);
+  PoseOptimizerResult fit =
+      optimisePose(camera_, T_c_w, observations_, pose_options_, &inliers_, nullptr, prior_ ? &*prior_ : nullptr);
+  if (fit.ok && prior_ && mark_inliers && !options_.motion_prior.in_final_fit) {
+    // The prior chose the matches; the points alone place the camera in the map they
+    // belong to (motion_prior.h).
+    inlier_observations_.clear();
+    inlier_index_.clear();
+    for (size_t i = 0; i < found.size(); ++i) {
+      if (!inliers_[i]) continue;
+      inlier_observations_.push_back(observations_[i]);
+      inlier_index_.push_back(i);
+    }
+    std::vector<uint8_t> kept;
+    const PoseOptimizerResult free_fit = optimisePose(camera_, fit.T_c_w, inlier_observations_, pose_options_, &kept);
+    if (free_fit.ok) {
+      fit = free_fit;
+      std::fill(inliers_.begin(), inliers_.end(), 0);
+      for (size_t k = 0; k < inlier_index_.size(); ++k) inliers_[inlier_index_[k]] = kept[k];
+    }
+  }
   if (mark_inliers) fine_information_ = fit.information;
   if (!fit.ok) return T_c_w;
   if (mark_inliers) {

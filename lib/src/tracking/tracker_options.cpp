@@ -25,6 +25,9 @@ void MotionOptions::bind(OptionRegistry* r, const std::string& s) {
           "fraction of the last inter-frame motion kept in the prediction");
   r->bind(s, "use_sbi_rotation", &use_sbi_rotation,
           "predict the rotation by aligning the previous and current small blurry images");
+  r->bind(s, "retry_without_sbi", &retry_without_sbi,
+          "a frame tracked poorly (quality below quality_good or a sudden drop) from the small blurry "
+          "images' rotation is tracked again from the damped velocity alone; the better is kept");
 }
 
 void CoarseStageOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -44,6 +47,10 @@ void CoarseStageOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "retry_quality_ratio", &retry_quality_ratio, 0.0, 1.0, "",
           "...also when its quality is below this fraction of the last tracked frame's (a "
           "sudden drop: the coarse stage pulled the pose off; 0: off)");
+  r->bind(s, "retry_with_coarse", &retry_with,
+          "a frame tracked poorly (by the two rules above) without a coarse stage, the predicted "
+          "image motion being small, is tracked again from the prediction with it; the better of "
+          "the two is kept");
 }
 
 void FineStageOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -75,6 +82,7 @@ void QualityOptions::bind(OptionRegistry* r, const std::string& s) {
 
 void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   motion.bind(r, s);
+  motion_prior.bind(r, s);
   coarse.bind(r, s);
   fine.bind(r, s);
   projection.bind(r, s);

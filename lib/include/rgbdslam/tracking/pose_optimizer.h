@@ -25,6 +25,7 @@
 #include "rgbdslam/camera/pinhole_camera.h"
 #include "rgbdslam/geometry/se3.h"
 #include "rgbdslam/model/noise_model.h"
+#include "rgbdslam/tracking/motion_prior.h"
 #include "rgbdslam/util/option_registry.h"
 
 namespace rgbdslam {
@@ -88,14 +89,17 @@ class ScalarResiduals {
 };
 
 // Minimises sum rho(|e2| / sigma2d(level)) + sum rho(|ed| / sigmaDepth(d)) (+ sum rho of
-// 'extra', if given) over T_c_w. inlier (optional) receives one flag per observation: its
-// 2-D residual kept a weight. Without 'extra' at least 3 observations are needed; with it,
-// what the residuals fix is up to the caller (see the information matrix).
+// 'extra', if given) (+ the quadratic 'prior', if given: motion_prior.h) over T_c_w. inlier
+// (optional) receives one flag per observation: its 2-D residual kept a weight. Without
+// 'extra' at least 3 observations are needed; with it, what the residuals fix is up to the
+// caller (see the information matrix). The prior moves the pose but is not part of the
+// information reported: that stays the measurements' own.
 PoseOptimizerResult optimisePose(const PinholeCamera& camera, const SE3& T_c_w_start,
                                  const std::vector<PoseObservation>& observations,
                                  const PoseOptimizerOptions& options,
                                  std::vector<uint8_t>* inlier = nullptr,
-                                 const ScalarResiduals* extra = nullptr);
+                                 const ScalarResiduals* extra = nullptr,
+                                 const PosePrior* prior = nullptr);
 
 // Tukey's biweight for a squared normalised error e2 and squared cut-off c2:
 // (1 - e2 / c2)^2 inside the cut-off, 0 outside.

@@ -46,6 +46,7 @@
 #include "rgbdslam/tracking/feature_relocaliser.h"
 #include "rgbdslam/tracking/keyframe_policy.h"
 #include "rgbdslam/tracking/map_replica.h"
+#include "rgbdslam/tracking/motion_prior.h"
 #include "rgbdslam/tracking/point_projection.h"
 #include "rgbdslam/tracking/pose_estimate.h"
 #include "rgbdslam/tracking/pose_optimizer.h"
@@ -57,6 +58,11 @@ namespace rgbdslam {
 struct MotionOptions {
   double velocity_damping = 0.9;  // fraction of last frame's velocity kept [0, 1]
   bool use_sbi_rotation = true;   // rotation pre-estimate from small blurry images
+  // A poor result from the small blurry images' rotation is compared with one from the
+  // damped velocity alone: plain walls and low-contrast floors mislead that rotation by a
+  // degree, beyond the fine stage's reach where too few points lie at the coarse levels
+  // (corridor C1 of the flight at 2 m/s), as they do depth-aided tracking's (below).
+  bool retry_without_sbi = true;
 
   void bind(OptionRegistry* registry, const std::string& section);
 };
@@ -83,6 +89,12 @@ struct CoarseStageOptions {
   // corridor's end wall: 0.81 -> 0.38 and a 5 cm jump, whose keyframe then triangulated the
   // wall at 40 % of its distance and ended the run; 0: off).
   double retry_quality_ratio = 0.6;
+  // The other way round: a poor result (by the same two rules) from the fine stage alone,
+  // where the predicted image motion looked too small for the coarse stage, is compared
+  // with the coarse and fine stages from the prediction. The predicted motion is only a
+  // prediction: a small-blurry-image rotation misled by plain walls, or forward motion
+  // whose median point lies near the focus of expansion (corridor C1 at 2 m/s).
+  bool retry_with = true;
 
   void bind(OptionRegistry* registry, const std::string& section);  // as coarse_*, retry_*
 };
@@ -127,6 +139,7 @@ struct QualityOptions {
 // Each part binds its own keys; the defaults are the parts' in-class ones.
 struct TrackerOptions {
   MotionOptions motion;
+  MotionPriorOptions motion_prior;  // the fit held to the motion within the vehicle's acceleration
   CoarseStageOptions coarse;
   FineStageOptions fine;
   ProjectionOptions projection;  // which points are searched (image margin)
@@ -189,10 +202,11 @@ struct TrackerOptions {
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
 };
 
-// Whether a frame tracked with a coarse stage, to 'quality', is tracked again from the
-// prediction without it (coarse.retry_without, quality.good, coarse.retry_quality_ratio);
-// 'last_quality' is the last accepted frame's quality (0 when there is none).
-bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality);
+// Whether a frame tracked to 'quality' is tracked again from the prediction with the other
+// choice of coarse stage: without it after one (coarse.retry_without), with it after none
+// (coarse.retry_with); poor is below quality.good or below coarse.retry_quality_ratio of
+// 'last_quality', the last accepted frame's quality (0 when there is none).
+bool coarseRetryWanted(const TrackerOptions& options, double quality, double last_quality, bool did_coarse = true);
 
 struct TrackResult {
   enum class Status {
