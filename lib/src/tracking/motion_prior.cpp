@@ -14,6 +14,21 @@ Mat6 inverseSpd(const Mat6& m) {
   return m.ldlt().solve(Mat6::Identity());
 }
 
+// The nearest positive semi-definite matrix: a depth-aided fit's information (the points'
+// plus the surfaces' honest share, depth_alignment.h) is a difference and may be indefinite.
+Mat6 clampPsd(const Mat6& m) {
+  if (!m.allFinite()) return Mat6::Zero();
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (m + m.transpose()));
+  if (eig.info() != Eigen::Success) return Mat6::Zero();
+  return eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+}
+
+bool positiveDefinite(const Mat6& m) {
+  if (!m.allFinite()) return false;
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (m + m.transpose()), Eigen::EigenvaluesOnly);
+  return eig.info() == Eigen::Success && eig.eigenvalues().minCoeff() > 0.0;
+}
+
 }  // namespace
 
 void MotionPriorOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -32,6 +47,8 @@ void MotionPriorOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "motion_prior_in_final_fit", &in_final_fit,
           "the prior stays in the fit that gives the pose (false: it only chooses the matches, "
           "whose fit without it gives the pose)");
+  r->bind(s, "motion_prior_min_gap_s", &min_gap_s, 0.0, 1.0, "s",
+          "frames closer in time than this count as the same instant: no prior, the newer pose taken");
   r->bind(s, "motion_prior_max_gap_s", &max_gap_s, 0.001, 100.0, "s",
           "a longer time between two poses forgets the velocity");
 }
@@ -39,7 +56,7 @@ void MotionPriorOptions::bind(OptionRegistry* r, const std::string& s) {
 std::optional<double> MotionPrior::gapS(int64_t utime) const {
   if (!options_.enabled || !have_pose_ || utime <= utime_) return std::nullopt;
   const double dt = static_cast<double>(utime - utime_) * 1e-6;
-  if (dt > options_.max_gap_s) return std::nullopt;
+  if (dt > options_.max_gap_s || dt < options_.min_gap_s) return std::nullopt;
   return dt;
 }
 
@@ -68,16 +85,22 @@ std::optional<PosePrior> MotionPrior::predict(int64_t utime) const {
   Mat12 P;
   propagate(*dt, &prior.T_c_w, &v, &P);
   prior.information = inverseSpd(P.topLeftCorner<6, 6>());
-  if (!prior.information.allFinite()) return std::nullopt;
+  if (!positiveDefinite(prior.information)) return std::nullopt;
   return prior;
 }
 
-void MotionPrior::update(int64_t utime, const SE3& T_c_w, const Mat6& measured) {
-  const std::optional<double> dt = gapS(utime);
-  if (!dt) {
-    reset(utime, T_c_w, measured);
+void MotionPrior::update(int64_t utime, const SE3& T_c_w, const Mat6& measured_raw) {
+  if (options_.enabled && have_pose_ && utime > utime_ && static_cast<double>(utime - utime_) * 1e-6 < options_.min_gap_s) {
+    T_c_w_ = T_c_w;  // the same instant: the newer pose, the velocity as it was
+    utime_ = utime;
     return;
   }
+  const std::optional<double> dt = gapS(utime);
+  if (!dt) {
+    reset(utime, T_c_w, measured_raw);
+    return;
+  }
+  const Mat6 measured = clampPsd(measured_raw);
   SE3 T_pred;
   Vec6 v_pred;
   Mat12 P;
@@ -93,7 +116,7 @@ void MotionPrior::update(int64_t utime, const SE3& T_c_w, const Mat6& measured) 
   P_post.topRightCorner<6, 6>() = P_post.bottomLeftCorner<6, 6>().transpose();
   P_post.bottomRightCorner<6, 6>() = P.bottomRightCorner<6, 6>() - K * P_vT.transpose() + K * P_TT_post * K.transpose();
   P_post = 0.5 * (P_post + P_post.transpose()).eval();
-  if (!P_post.allFinite() || !innovation.allFinite()) {
+  if (!P_post.allFinite() || !innovation.allFinite() || !positiveDefinite(P_post.topLeftCorner<6, 6>())) {
     reset(utime, T_c_w, measured);
     return;
   }
@@ -109,8 +132,7 @@ void MotionPrior::reset(int64_t utime, const SE3& T_c_w, const Mat6& measured) {
   T_c_w_ = T_c_w;
   v_.setZero();
   P_.setZero();
-  Mat6 information = measured + kStartInformation * Mat6::Identity();
-  if (!information.allFinite()) information = kStartInformation * Mat6::Identity();
+  const Mat6 information = clampPsd(measured) + kStartInformation * Mat6::Identity();
   P_.topLeftCorner<6, 6>() = inverseSpd(information);
   for (int i = 0; i < 6; ++i) {
     const double sigma = i < 3 ? options_.max_speed_m_s : options_.max_rate_rad_s;

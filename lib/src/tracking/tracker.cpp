@@ -405,6 +405,7 @@ class Tracker::Impl {
   std::optional<PosePrior> prior_;
   std::vector<PoseObservation> inlier_observations_;  // runStage's fit without the prior
   std::vector<size_t> inlier_index_;
+  bool coarse_possible_ = false;  // the last trackFrom had enough points for a coarse stage
   // While lost: the velocity when tracking was lost, and the frames lost since (a vehicle
   // does not stop when its tracker loses it: relocalise() tries where it coasted to).
   Vec6 lost_velocity_ = Vec6::Zero();
@@ -695,7 +696,9 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
   // therefore compared with the fine stage alone from the prediction, and the attempt that
   // explains more of its searched points is kept. So is one whose quality dropped sharply
   // from the last frame's (CoarseStageOptions::retry_quality_ratio).
-  if (coarseRetryWanted(options_, attempt.quality, last_quality_, attempt.did_coarse)) {
+  // (Without enough points at the coarse levels the retry with it would be the same fine stage.)
+  if ((attempt.did_coarse || coarse_possible_) &&
+      coarseRetryWanted(options_, attempt.quality, last_quality_, attempt.did_coarse)) {
     attempt = betterOf(attempt, predicted, frame, attempt.did_coarse ? Coarse::kNever : Coarse::kAlways);
   }
   if (use_sbi && options_.motion.retry_without_sbi && poorResult(options_, attempt.quality, last_quality_)) {
@@ -1353,7 +1356,8 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
     if (slot->search_level >= options_.coarse.min_level) stage_.push_back(slot);
   }
   bool did_coarse = false;
-  if (coarse != Coarse::kNever && static_cast<int>(stage_.size()) >= options_.coarse.min_points &&
+  coarse_possible_ = static_cast<int>(stage_.size()) >= options_.coarse.min_points;
+  if (coarse != Coarse::kNever && coarse_possible_ &&
       (coarse == Coarse::kAlways || coarseWanted(T_c_w_start))) {
     did_coarse = true;
     selectSubset(&stage_, options_.coarse.max_points);
