@@ -4,7 +4,7 @@
 # range ahead. Without the motion prior the points found there drop to 12-22 by frame 628
 # and the pose is lost at frame 630 (718 posed at 28 mm with the retries of 2026-11-27; 634
 # posed at 47 mm before them). With it (tracker.motion_prior, motion_prior.h) the flight
-# keeps its pose: measured 2026-11-27, 720 / 720 posed, ATE 4.5 mm.
+# keeps its pose: measured 2026-11-27, 720 / 720 posed, ATE 4.3 mm.
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.010
 

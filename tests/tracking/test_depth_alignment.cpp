@@ -202,7 +202,8 @@ struct OfficeRun {
 };
 
 TEST(DepthAlignment, TheReferenceHoldsThePoseWhereTheKeyframesLeftTheView) {
-  constexpr size_t kFrames = 420, kLate = 300;  // without a reference: lost for good at 252-271
+  // Without a reference: lost for good at 252-271 (at 301 since the motion prior, 2026-11-27).
+  constexpr size_t kFrames = 420, kLate = 300;
   const SyntheticScene office(*parseSyntheticSpec("office,effects=none,frames=420"));
   TrackerOptions with_options, without_options;
   without_options.depth_align.reference_step_m = 0.0;
@@ -230,7 +231,7 @@ TEST(DepthAlignment, TheReferenceHoldsThePoseWhereTheKeyframesLeftTheView) {
          "without: %d posed, %d from frame %zu, largest error %.4f m\n",
          runs[0].posed, runs[0].posed_late, kLate, runs[0].max_error_m, runs[0].max_error_early_m,
          runs[1].posed, runs[1].posed_late, kLate, runs[1].max_error_m);
-  EXPECT_EQ(runs[1].posed_late, 0);  // the keyframes' surfaces alone lose it
+  EXPECT_LT(runs[1].posed_late, 10);  // the keyframes' surfaces alone lose it
   EXPECT_EQ(runs[0].posed_late, static_cast<int>(kFrames - kLate));
   EXPECT_EQ(runs[0].reported_good_aided, 0);  // dodgy: vision did not hold it
   // The same frames as without up to frame 252; then drift of depth odometry, no jump.
