@@ -12,15 +12,15 @@
 namespace rgbdslam {
 namespace {
 
-constexpr int64_t kFrameUs = 33333;  // 30 Hz
+constexpr int64_t kPriorFrameUs = 33333;  // 30 Hz
 
-Vec6 twist(double vx, double vy, double vz, double wx, double wy, double wz) {
+Vec6 priorTwist(double vx, double vy, double vz, double wx, double wy, double wz) {
   Vec6 v;
   v << vx, vy, vz, wx, wy, wz;
   return v;
 }
 
-double translationError(const SE3& a, const SE3& b) {
+double priorPositionError(const SE3& a, const SE3& b) {
   return (a.inverse().translation() - b.inverse().translation()).norm();
 }
 
@@ -29,41 +29,41 @@ double translationError(const SE3& a, const SE3& b) {
 // acceleration's share.
 TEST(MotionPrior, LearnsAConstantVelocityAndPredictsTheNextPose) {
   MotionPrior prior;
-  const Vec6 v = twist(2.0, 0.0, 0.1, 0.0, 0.5, 0.0);  // 2 m/s, 29 deg/s
+  const Vec6 v = priorTwist(2.0, 0.0, 0.1, 0.0, 0.5, 0.0);  // 2 m/s, 29 deg/s
   const Mat6 measured = 1e8 * Mat6::Identity();
   SE3 T;
   prior.reset(0, T, measured);
   for (int k = 1; k <= 30; ++k) {
-    T = SE3::exp(kFrameUs * 1e-6 * v) * T;
-    prior.update(k * kFrameUs, T, measured);
+    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+    prior.update(k * kPriorFrameUs, T, measured);
   }
   EXPECT_LT((prior.velocity() - v).norm(), 1e-3);
-  const std::optional<PosePrior> next = prior.predict(31 * kFrameUs);
+  const std::optional<PosePrior> next = prior.predict(31 * kPriorFrameUs);
   ASSERT_TRUE(next);
-  const SE3 truth = SE3::exp(kFrameUs * 1e-6 * v) * T;
-  EXPECT_LT(translationError(next->T_c_w, truth), 1e-4);
+  const SE3 truth = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+  EXPECT_LT(priorPositionError(next->T_c_w, truth), 1e-4);
   // The prior's sigma in translation: the acceleration's 0.5 a dt^2 (2.8 mm at 5 m/s^2)
   // and the velocity's uncertainty, a few mm at most.
   const double sigma_x = std::sqrt(next->information.inverse()(0, 0));
-  EXPECT_GT(sigma_x, 0.5 * 0.5 * 5.0 * std::pow(kFrameUs * 1e-6, 2));
+  EXPECT_GT(sigma_x, 0.5 * 0.5 * 5.0 * std::pow(kPriorFrameUs * 1e-6, 2));
   EXPECT_LT(sigma_x, 0.01);
 }
 
 TEST(MotionPrior, NoPriorWithoutAPoseAfterAGapOrWhenTimeGoesBackOrWhenOff) {
   MotionPrior prior;
-  EXPECT_FALSE(prior.predict(kFrameUs));  // no pose yet
+  EXPECT_FALSE(prior.predict(kPriorFrameUs));  // no pose yet
   prior.reset(0, SE3(), Mat6::Identity());
-  EXPECT_TRUE(prior.predict(kFrameUs));
+  EXPECT_TRUE(prior.predict(kPriorFrameUs));
   EXPECT_FALSE(prior.predict(0));                         // no time passed
-  EXPECT_FALSE(prior.predict(-kFrameUs));                 // time went back
+  EXPECT_FALSE(prior.predict(-kPriorFrameUs));                 // time went back
   EXPECT_FALSE(prior.predict(static_cast<int64_t>(0.6e6)));  // beyond max_gap_s (0.5 s)
   prior.clear();
-  EXPECT_FALSE(prior.predict(kFrameUs));
+  EXPECT_FALSE(prior.predict(kPriorFrameUs));
   MotionPriorOptions off;
   off.enabled = false;
   MotionPrior disabled(off);
   disabled.reset(0, SE3(), Mat6::Identity());
-  EXPECT_FALSE(disabled.predict(kFrameUs));
+  EXPECT_FALSE(disabled.predict(kPriorFrameUs));
 }
 
 // After a reset the velocity is unknown: the next frame's prior is as weak as the top
@@ -71,17 +71,17 @@ TEST(MotionPrior, NoPriorWithoutAPoseAfterAGapOrWhenTimeGoesBackOrWhenOff) {
 TEST(MotionPrior, AfterAResetThePriorIsWeak) {
   MotionPrior prior;
   prior.reset(0, SE3(), 1e8 * Mat6::Identity());
-  const std::optional<PosePrior> next = prior.predict(kFrameUs);
+  const std::optional<PosePrior> next = prior.predict(kPriorFrameUs);
   ASSERT_TRUE(next);
   const double sigma_x = std::sqrt(next->information.inverse()(0, 0));
-  EXPECT_NEAR(sigma_x, 3.0 * kFrameUs * 1e-6, 0.01);
+  EXPECT_NEAR(sigma_x, 3.0 * kPriorFrameUs * 1e-6, 0.01);
 }
 
 // A direction the measurements do not fix is predicted by the filter (dead reckoning),
 // with an uncertainty that grows frame by frame, while fixed directions stay tight.
 TEST(MotionPrior, AnUnmeasuredDirectionIsCarriedByTheVelocity) {
   MotionPrior prior;
-  const Vec6 v = twist(0.0, 0.0, 2.0, 0.0, 0.0, 0.0);  // forward along the optical axis
+  const Vec6 v = priorTwist(0.0, 0.0, 2.0, 0.0, 0.0, 0.0);  // forward along the optical axis
   Mat6 all = 1e8 * Mat6::Identity();
   Mat6 no_z = all;
   no_z(2, 2) = 0.0;
@@ -89,22 +89,22 @@ TEST(MotionPrior, AnUnmeasuredDirectionIsCarriedByTheVelocity) {
   prior.reset(0, T, all);
   int k = 1;
   for (; k <= 20; ++k) {
-    T = SE3::exp(kFrameUs * 1e-6 * v) * T;
-    prior.update(k * kFrameUs, T, all);
+    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+    prior.update(k * kPriorFrameUs, T, all);
   }
   double last_sigma_z = 0.0;
   for (; k <= 40; ++k) {
-    const std::optional<PosePrior> next = prior.predict(k * kFrameUs);
+    const std::optional<PosePrior> next = prior.predict(k * kPriorFrameUs);
     ASSERT_TRUE(next);
     const Mat6 covariance = next->information.inverse();
     const double sigma_z = std::sqrt(covariance(2, 2));
     EXPECT_GT(sigma_z, last_sigma_z);
     EXPECT_LT(std::sqrt(covariance(0, 0)), 0.01);
     last_sigma_z = sigma_z;
-    T = SE3::exp(kFrameUs * 1e-6 * v) * T;
-    prior.update(k * kFrameUs, next->T_c_w, no_z);  // the fit followed the prior in z
+    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+    prior.update(k * kPriorFrameUs, next->T_c_w, no_z);  // the fit followed the prior in z
   }
-  EXPECT_LT(translationError(prior.predict(k * kFrameUs)->T_c_w, SE3::exp(kFrameUs * 1e-6 * v) * T), 1e-3);
+  EXPECT_LT(priorPositionError(prior.predict(k * kPriorFrameUs)->T_c_w, SE3::exp(kPriorFrameUs * 1e-6 * v) * T), 1e-3);
 }
 
 // A depth-aided fit's information is a difference and may be indefinite; the filter takes
@@ -114,31 +114,31 @@ TEST(MotionPrior, AnIndefiniteMeasurementLeavesThePriorPositiveDefinite) {
   Mat6 indefinite = 1e6 * Mat6::Identity();
   indefinite(2, 2) = -50.0;
   prior.reset(0, SE3(), indefinite);
-  prior.update(kFrameUs, SE3(), indefinite);
-  const std::optional<PosePrior> next = prior.predict(2 * kFrameUs);
+  prior.update(kPriorFrameUs, SE3(), indefinite);
+  const std::optional<PosePrior> next = prior.predict(2 * kPriorFrameUs);
   ASSERT_TRUE(next);
   const Eigen::SelfAdjointEigenSolver<Mat6> eig(next->information);
   EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
   Mat6 nan = Mat6::Identity();
   nan(0, 0) = std::nan("");
-  prior.update(3 * kFrameUs, SE3(), nan);
-  ASSERT_TRUE(prior.predict(4 * kFrameUs));
-  EXPECT_TRUE(prior.predict(4 * kFrameUs)->information.allFinite());
+  prior.update(3 * kPriorFrameUs, SE3(), nan);
+  ASSERT_TRUE(prior.predict(4 * kPriorFrameUs));
+  EXPECT_TRUE(prior.predict(4 * kPriorFrameUs)->information.allFinite());
 }
 
 // Frames stamped a millisecond apart (a burst on arrival) are one instant: no prior that
 // would claim the camera cannot have moved, and the velocity learnt before stays.
 TEST(MotionPrior, FramesCloserThanTheMinimumGapAreOneInstant) {
   MotionPrior prior;
-  const Vec6 v = twist(0.0, 0.0, 2.0, 0.0, 0.0, 0.0);
+  const Vec6 v = priorTwist(0.0, 0.0, 2.0, 0.0, 0.0, 0.0);
   const Mat6 measured = 1e8 * Mat6::Identity();
   SE3 T;
   prior.reset(0, T, measured);
   for (int k = 1; k <= 10; ++k) {
-    T = SE3::exp(kFrameUs * 1e-6 * v) * T;
-    prior.update(k * kFrameUs, T, measured);
+    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+    prior.update(k * kPriorFrameUs, T, measured);
   }
-  const int64_t burst = 10 * kFrameUs + 1000;
+  const int64_t burst = 10 * kPriorFrameUs + 1000;
   EXPECT_FALSE(prior.predict(burst));
   prior.update(burst, T, measured);
   EXPECT_LT((prior.velocity() - v).norm(), 1e-2);
@@ -148,15 +148,15 @@ TEST(MotionPrior, FramesCloserThanTheMinimumGapAreOneInstant) {
 TEST(MotionPrior, FollowsAMovedWorld) {
   MotionPrior prior;
   prior.reset(0, SE3(), 1e8 * Mat6::Identity());
-  const SE3 T_new_old = SE3::exp(twist(0.1, 0.0, 0.0, 0.0, 0.0, 0.0));
+  const SE3 T_new_old = SE3::exp(priorTwist(0.1, 0.0, 0.0, 0.0, 0.0, 0.0));
   prior.moveWorld(T_new_old);
-  const std::optional<PosePrior> next = prior.predict(kFrameUs);
+  const std::optional<PosePrior> next = prior.predict(kPriorFrameUs);
   ASSERT_TRUE(next);
   // The camera stood at the old world's origin, which is at (0.1, 0, 0) in the new world.
   EXPECT_LT((next->T_c_w.inverse().translation() - Vec3(0.1, 0.0, 0.0)).norm(), 1e-9);
 }
 
-struct Scene {
+struct PriorScene {
   PinholeCamera camera;
   SE3 T_c_w_true;
   std::vector<PoseObservation> observations;
@@ -164,11 +164,11 @@ struct Scene {
 
 // Points 'near' to 'far' m ahead, seen exactly, no depth. On a far plane they fix rotation
 // well and translation across the view poorly.
-Scene pointsAhead(int n, double near, double far, unsigned seed) {
-  Scene scene;
+PriorScene priorPointsAhead(int n, double near, double far, unsigned seed) {
+  PriorScene scene;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), distance(near, far);
-  scene.T_c_w_true = SE3::exp(twist(0.2, -0.1, 0.3, 0.05, -0.1, 0.02));
+  scene.T_c_w_true = SE3::exp(priorTwist(0.2, -0.1, 0.3, 0.05, -0.1, 0.02));
   const SE3 T_w_c = scene.T_c_w_true.inverse();
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d uv(320 + 300 * unit(rng), 240 + 220 * unit(rng));
@@ -181,7 +181,7 @@ Scene pointsAhead(int n, double near, double far, unsigned seed) {
 // centred on the truth, holds the pose, and the information reported is the measurements'
 // alone.
 TEST(MotionPrior, HoldsTheFitWhereFarPointsAndWrongMatchesWouldCarryItOff) {
-  Scene scene = pointsAhead(40, 20.0, 20.0, 3);
+  PriorScene scene = priorPointsAhead(40, 20.0, 20.0, 3);
   PoseOptimizerOptions options;
   options.use_depth = false;
   // Half the matches shifted alike by 3 px: a consistent wrong match (a repeated
@@ -195,8 +195,8 @@ TEST(MotionPrior, HoldsTheFitWhereFarPointsAndWrongMatchesWouldCarryItOff) {
   const PoseOptimizerResult held =
       optimisePose(scene.camera, scene.T_c_w_true, scene.observations, options, nullptr, nullptr, &prior);
   ASSERT_TRUE(held.ok);
-  EXPECT_GT(translationError(free_fit.T_c_w, scene.T_c_w_true), 0.02);
-  EXPECT_LT(translationError(held.T_c_w, scene.T_c_w_true), 0.01);
+  EXPECT_GT(priorPositionError(free_fit.T_c_w, scene.T_c_w_true), 0.02);
+  EXPECT_LT(priorPositionError(held.T_c_w, scene.T_c_w_true), 0.01);
   // The reported information excludes the prior: the far plane fixes the sideways
   // translation no better with it.
   EXPECT_LT(poseUncertainty(held.information).translation_m * 0.5, poseUncertainty(free_fit.information).translation_m);
@@ -208,17 +208,17 @@ TEST(MotionPrior, HoldsTheFitWhereFarPointsAndWrongMatchesWouldCarryItOff) {
 // from a turn only by perspective, and such a prior moves a fit by a centimetre: there the
 // prior is worth as much as they are.)
 TEST(MotionPrior, PointsThatFixThePoseOutweighAWrongPrior) {
-  const Scene scene = pointsAhead(100, 1.0, 4.0, 4);
+  const PriorScene scene = priorPointsAhead(100, 1.0, 4.0, 4);
   PoseOptimizerOptions options;
   PosePrior prior;
-  prior.T_c_w = SE3::exp(twist(0.03, 0.0, 0.0, 0.0, 0.0, 0.0)) * scene.T_c_w_true;  // 3 cm off
+  prior.T_c_w = SE3::exp(priorTwist(0.03, 0.0, 0.0, 0.0, 0.0, 0.0)) * scene.T_c_w_true;  // 3 cm off
   prior.information.diagonal() << 1e5, 1e5, 1e5, 1e3, 1e3, 1e3;
   std::vector<PoseObservation> with_depth = scene.observations;
   for (PoseObservation& obs : with_depth) obs.depth = (scene.T_c_w_true * obs.p_w).z();
   const PoseOptimizerResult fit =
       optimisePose(scene.camera, scene.T_c_w_true, with_depth, options, nullptr, nullptr, &prior);
   ASSERT_TRUE(fit.ok);
-  EXPECT_LT(translationError(fit.T_c_w, scene.T_c_w_true), 0.003);
+  EXPECT_LT(priorPositionError(fit.T_c_w, scene.T_c_w_true), 0.003);
 }
 
 }  // namespace
