@@ -403,8 +403,10 @@ class Tracker::Impl {
   // being tracked (none while relocalising: a candidate's pose is not where the motion went).
   MotionPrior motion_prior_;
   std::optional<PosePrior> prior_;
+  const PosePrior* priorOrNull() const { return prior_ ? &*prior_ : nullptr; }
   std::vector<PoseObservation> inlier_observations_;  // runStage's fit without the prior
   std::vector<size_t> inlier_index_;
+  std::vector<uint8_t> inlier_kept_;
   bool coarse_possible_ = false;  // the last trackFrom had enough points for a coarse stage
   // While lost: the velocity when tracking was lost, and the frames lost since (a vehicle
   // does not stop when its tracker loses it: relocalise() tries where it coasted to).
@@ -949,7 +951,7 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   // rotation: an image that shows nothing (a plain wall, the lights out) misleads that
   // rotation estimate, and the attempt's few points may not have corrected it.
   PoseOptimizerResult fit =
-      optimisePose(camera_, attempt.T_c_w, observations_, pose_options_, &inliers_, &planes, prior_ ? &*prior_ : nullptr);
+      optimisePose(camera_, attempt.T_c_w, observations_, pose_options_, &inliers_, &planes, priorOrNull());
   // The information the surfaces really give (honestInformation) replaces theirs in the fit's.
   Eigen::Matrix<double, 6, 6> surfaces_excess =
       fit.extra_information - planes.honestInformation(fit.extra_information, o.effective_samples, fit.inliers_extra);
@@ -957,7 +959,7 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   std::vector<uint8_t> other_inliers;
   const PoseOptimizerResult other =
       optimisePose(camera_, velocity_start, observations_, pose_options_, &other_inliers, &planes,
-                   prior_ ? &*prior_ : nullptr);
+                   priorOrNull());
   if (other.ok && (!fit.ok || other.inliers_extra + other.inliers_2d > fit.inliers_extra + fit.inliers_2d)) {
     fit = other;
     inliers_.swap(other_inliers);
@@ -1427,7 +1429,7 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
     found.push_back(slot);
   }
   PoseOptimizerResult fit =
-      optimisePose(camera_, T_c_w, observations_, pose_options_, &inliers_, nullptr, prior_ ? &*prior_ : nullptr);
+      optimisePose(camera_, T_c_w, observations_, pose_options_, &inliers_, nullptr, priorOrNull());
   if (fit.ok && prior_ && mark_inliers && !options_.motion_prior.in_final_fit) {
     // The prior chose the matches; the points alone place the camera in the map they
     // belong to (motion_prior.h).
@@ -1438,12 +1440,12 @@ SE3 Tracker::Impl::runStage(const std::vector<PointSlot*>& slots, const SE3& T_c
       inlier_observations_.push_back(observations_[i]);
       inlier_index_.push_back(i);
     }
-    std::vector<uint8_t> kept;
-    const PoseOptimizerResult free_fit = optimisePose(camera_, fit.T_c_w, inlier_observations_, pose_options_, &kept);
+    const PoseOptimizerResult free_fit =
+        optimisePose(camera_, fit.T_c_w, inlier_observations_, pose_options_, &inlier_kept_);
     if (free_fit.ok) {
       fit = free_fit;
       std::fill(inliers_.begin(), inliers_.end(), 0);
-      for (size_t k = 0; k < inlier_index_.size(); ++k) inliers_[inlier_index_[k]] = kept[k];
+      for (size_t k = 0; k < inlier_index_.size(); ++k) inliers_[inlier_index_[k]] = inlier_kept_[k];
     }
   }
   if (mark_inliers) fine_information_ = fit.information;
