@@ -262,7 +262,7 @@ void EpipolarOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "epipolar_distinctiveness", &distinctiveness, 0.0, 1.0, "-", "best ZMSSD must be below this times the second best");
   r->bind(s, "epipolar_cross_check", &cross_check,
           "depth modes: keep a match only when its patch, searched back along its own epipolar "
-          "segment, finds the corner it came from (stereo's left-right consistency; off: see "
+          "segment, finds the corner it came from (stereo's left-right consistency; see "
           "epipolar_search.h)");
   r->bind(s, "epipolar_min_parallax_deg", &min_parallax_deg, 0.0, 90.0, "deg", "smaller ray angles do not triangulate");
   r->bind(s, "epipolar_max_reprojection_px", &max_reprojection_px, 0.1, 20.0, "level px", "triangulated point's error in either view");

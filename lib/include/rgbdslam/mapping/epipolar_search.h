@@ -39,11 +39,14 @@ struct EpipolarOptions {
   // The match searched back along its own epipolar segment must find the corner it came
   // from (within 2 px at the level): stereo's left-right consistency, against chance matches
   // on the near end of a segment whose true match lies beyond it (a surface beyond the
-  // range: "near ghosts"). It costs 1.5-3.6 times the search time (bench_epipolar). Off:
-  // whole runs do not gain from it yet (docs/open_work.md, session 23). The mapper applies it
-  // in the depth modes only (mono searches every corner, and the paper's Table I was
-  // measured without it).
-  bool cross_check = false;
+  // range: "near ghosts"). It costs 1.5-3.6 times the search time (bench_epipolar), on the
+  // ground station's mapper. On since session 26: with the tracker's motion prior no whole
+  // run measured is clearly worse with it, the flight's worst world of 20 (first 720 frames)
+  // went 7.3 -> 5.5 mm and the rest moved within the spread between worlds and seeds
+  // (docs/open_work.md, session 26); before the prior, runs tipped on the points it refuses
+  // (session 23). The mapper applies it in the depth modes only (mono
+  // searches every corner, and the paper's Table I was measured without it).
+  bool cross_check = true;
   double min_parallax_deg = 1.0;      // smaller angles between the rays are rejected [deg]
   double max_reprojection_px = 2.0;   // triangulated point's error in either view [level px]
   // Only corners without a depth reading (the depth modes); set by the mapper per keyframe
