@@ -13,7 +13,11 @@
 # on by default since then) it finds 8 and is lost for good with each of the three seeds. So
 # this test pins the settings under which it shows what coasting does: the prior off, as it
 # was measured. A robust recovery after a cover at 2 m/s is open work (docs/open_work.md,
-# session 25).
+# session 25). With the epipolar cross-check on (mapper.epipolar_cross_check, 2026-11-27,
+# session 26) these settings give 705 / 705 uncovered frames posed but ATE 61.9 mm: for ten
+# frames after the recovery the pose rests on 6-26 points (quality 0.14-0.36) and the map
+# is corrected by 12-24 cm after it; the bound below (0.1 m) still holds, the control
+# (640 posed) is unchanged.
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.1
 
