@@ -2,7 +2,7 @@
 # The flight's first 720 frames in its eighth world (synth:flight,frames=720,seed=8): corridor
 # C1 at 2 m/s from frame 540, weakly textured walls and the hall's far wall beyond the depth
 # range ahead. Without the motion prior the pose is lost at frame 697 with 11 points found and
-# again at 713 and 716-718 (714 posed at 58 mm); with it (tracker.motion_prior, motion_prior.h) the
+# again at 713-714 and 716-718 (714 posed at 58 mm); with it (tracker.motion_prior, motion_prior.h) the
 # flight keeps its pose: measured 2026-11-27 with the epipolar cross-check on, 720 / 720
 # posed, ATE 4.4 mm. (World 10, this test's world before the cross-check was on, no longer
 # needs the prior: 720 posed at 5.5 mm without it; docs/open_work.md, session 26.)
