@@ -20,6 +20,18 @@ Vec6 priorTwist(double vx, double vy, double vz, double wx, double wy, double wz
   return v;
 }
 
+// Starts 'prior' at the identity at time 0 and feeds it 'frames' poses measured with
+// 'measured' along the constant twist 'v', one per frame at 30 Hz; returns the last pose.
+SE3 flyConstantVelocity(MotionPrior* prior, const Vec6& v, const Mat6& measured, int frames) {
+  SE3 T;
+  prior->reset(0, T, measured);
+  for (int k = 1; k <= frames; ++k) {
+    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
+    prior->update(k * kPriorFrameUs, T, measured);
+  }
+  return T;
+}
+
 double priorPositionError(const SE3& a, const SE3& b) {
   return (a.inverse().translation() - b.inverse().translation()).norm();
 }
@@ -31,12 +43,7 @@ TEST(MotionPrior, LearnsAConstantVelocityAndPredictsTheNextPose) {
   MotionPrior prior;
   const Vec6 v = priorTwist(2.0, 0.0, 0.1, 0.0, 0.5, 0.0);  // 2 m/s, 29 deg/s
   const Mat6 measured = 1e8 * Mat6::Identity();
-  SE3 T;
-  prior.reset(0, T, measured);
-  for (int k = 1; k <= 30; ++k) {
-    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
-    prior.update(k * kPriorFrameUs, T, measured);
-  }
+  const SE3 T = flyConstantVelocity(&prior, v, measured, 30);
   EXPECT_LT((prior.velocity() - v).norm(), 1e-3);
   const std::optional<PosePrior> next = prior.predict(31 * kPriorFrameUs);
   ASSERT_TRUE(next);
@@ -85,13 +92,8 @@ TEST(MotionPrior, AnUnmeasuredDirectionIsCarriedByTheVelocity) {
   Mat6 all = 1e8 * Mat6::Identity();
   Mat6 no_z = all;
   no_z(2, 2) = 0.0;
-  SE3 T;
-  prior.reset(0, T, all);
-  int k = 1;
-  for (; k <= 20; ++k) {
-    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
-    prior.update(k * kPriorFrameUs, T, all);
-  }
+  SE3 T = flyConstantVelocity(&prior, v, all, 20);
+  int k = 21;
   double last_sigma_z = 0.0;
   for (; k <= 40; ++k) {
     const std::optional<PosePrior> next = prior.predict(k * kPriorFrameUs);
@@ -132,12 +134,7 @@ TEST(MotionPrior, FramesCloserThanTheMinimumGapAreOneInstant) {
   MotionPrior prior;
   const Vec6 v = priorTwist(0.0, 0.0, 2.0, 0.0, 0.0, 0.0);
   const Mat6 measured = 1e8 * Mat6::Identity();
-  SE3 T;
-  prior.reset(0, T, measured);
-  for (int k = 1; k <= 10; ++k) {
-    T = SE3::exp(kPriorFrameUs * 1e-6 * v) * T;
-    prior.update(k * kPriorFrameUs, T, measured);
-  }
+  const SE3 T = flyConstantVelocity(&prior, v, measured, 10);
   const int64_t burst = 10 * kPriorFrameUs + 1000;
   EXPECT_FALSE(prior.predict(burst));
   prior.update(burst, T, measured);
