@@ -13,7 +13,9 @@ void DepthRecord::add(DepthVerdict verdict, double depth_m) {
   }
   ++checks;
   seen_through += verdict == DepthVerdict::kSeenThrough;
-  read_max_m = std::max(read_max_m, static_cast<float>(depth_m));
+  // Only a reading of the point's own surface tells how far that surface gives readings; an
+  // occluder's (nearer) or the background's (farther, seen through) does not.
+  if (verdict == DepthVerdict::kAgrees) read_max_m = std::max(read_max_m, static_cast<float>(depth_m));
 }
 
 void DepthIntegrityOptions::bind(OptionRegistry* r, const std::string& s) {
