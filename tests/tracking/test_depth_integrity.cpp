@@ -136,5 +136,45 @@ TEST(DepthRecord, ExpectsAReadingOnlyWhereTheSurfaceGaveOneAsFarAway) {
   EXPECT_TRUE(record.mostlySeenThrough());     // 5 of 8 checks with a reading: glass
 }
 
+TEST(Occlusion, APointBehindTheMeasuredWallIsHiddenOneOnItOrInFrontIsNot) {
+  const RgbdFrame frame = wallFrame(2.0);
+  const OcclusionOptions options;
+  const auto hidden = [&](double z) {
+    const Vec3 p_c = camera().unproject(Eigen::Vector2d(80, 60), z);
+    return hiddenInDepth(p_c, Eigen::Vector2d(80, 60), frame, NoiseModel{}, 0.3, 8.0, options);
+  };
+  EXPECT_FALSE(hidden(2.0));   // on the wall
+  EXPECT_FALSE(hidden(1.0));   // in front of it
+  EXPECT_FALSE(hidden(2.05));  // behind by less than the margin (0.1 m; 3 sigma: 57 mm)
+  EXPECT_TRUE(hidden(2.5));    // behind it
+  EXPECT_TRUE(hidden(12.0));   // far beyond the depth range, behind it
+  // Without a depth image nothing is hidden.
+  RgbdFrame no_depth = frame;
+  no_depth.depth = cv::Mat();
+  EXPECT_FALSE(hiddenInDepth(Vec3(0, 0, 5), Eigen::Vector2d(80, 60), no_depth, NoiseModel{}, 0.3, 8.0, options));
+}
+
+TEST(Occlusion, AFartherReadingInTheWindowOrTooFewReadingsLeaveThePointSearched) {
+  // The wall's edge: left of u = 84 a wall at 1 m, right of it the far side at 3 m. A point
+  // at 3 m predicted at u = 80, a few pixels short of where it shows, is searched; one
+  // predicted well inside the wall is hidden.
+  RgbdFrame frame = wallFrame(3.0);
+  frame.depth(cv::Rect(0, 0, 84, 120)).setTo(1000);
+  const OcclusionOptions options;
+  const auto hidden = [&](double u) {
+    return hiddenInDepth(camera().unproject(Eigen::Vector2d(u, 60), 3.0), Eigen::Vector2d(u, 60), frame,
+                         NoiseModel{}, 0.3, 8.0, options);
+  };
+  EXPECT_FALSE(hidden(80.0));
+  EXPECT_TRUE(hidden(40.0));
+  // Holes: with fewer readings than min_readings in the window nothing is decided.
+  frame.depth(cv::Rect(30, 50, 20, 20)).setTo(0);
+  frame.depth.at<uint16_t>(60, 40) = 1000;
+  EXPECT_FALSE(hidden(40.0));
+  // Readings out of the range [0.3, 8] m count as none: a wall at 0.2 m hides nothing.
+  RgbdFrame too_near = wallFrame(0.2);
+  EXPECT_FALSE(hiddenInDepth(Vec3(0, 0, 2.0), Eigen::Vector2d(80, 60), too_near, NoiseModel{}, 0.3, 8.0, options));
+}
+
 }  // namespace
 }  // namespace rgbdslam

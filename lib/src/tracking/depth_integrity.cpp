@@ -36,6 +36,46 @@ void DepthIntegrityOptions::bind(OptionRegistry* r, const std::string& s) {
           "point's surface gave a reading at most of its accepted poses");
 }
 
+void OcclusionOptions::bind(OptionRegistry* r, const std::string& s) {
+  r->bind(s, "occlusion_check", &enabled,
+          "map points behind a nearer measured surface are not searched and do not count in the quality (depth modes)");
+  r->bind(s, "occlusion_window_px", &window_px, 2, 20, "px",
+          "every reading within this of a point's projection (every other pixel; rounded down to even) must be nearer for it to be hidden");
+  r->bind(s, "occlusion_min_readings", &min_readings, 1, 441, "samples",
+          "fewer of the window's samples with a reading (25 at a window of 4 px, 9 at 2): the point is searched");
+  r->bind(s, "occlusion_sigmas", &sigmas, 0.5, 100.0, "sigmas",
+          "hidden: the readings nearer than the point by this many sigmas of the depth noise (reading and point)");
+  r->bind(s, "occlusion_min_m", &min_m, 0.0, 10.0, "m", "...and by at least this");
+  r->bind(s, "occlusion_min_agreeing", &min_agreeing, 0, 100000, "points",
+          "...and only after a pose tracked from the motion's prediction at which at least this many found points agreed with their depth readings (by tracker.integrity_check: off, no point is left out)");
+}
+
+bool hiddenInDepth(const Vec3& p_c, const Eigen::Vector2d& uv, const RgbdFrame& frame, const NoiseModel& noise,
+                   double min_depth_m, double max_depth_m, const OcclusionOptions& options) {
+  if (frame.depth.empty() || frame.depth.type() != CV_16UC1 || !(frame.depth_scale > 0) || !(p_c.z() > 0.0)) {
+    return false;
+  }
+  const double raw_min = std::max(1.0, std::ceil(min_depth_m * frame.depth_scale));
+  const double raw_max = std::min(65535.0, std::floor(max_depth_m * frame.depth_scale));
+  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
+  const int w = options.window_px / 2 * 2;  // even: the samples, every other pixel, include (u, v)
+  int readings = 0;
+  uint16_t farthest = 0;
+  for (int y = v - w; y <= v + w; y += 2) {
+    if (y < 0 || y >= frame.depth.rows) continue;
+    const uint16_t* row = frame.depth.ptr<uint16_t>(y);
+    for (int x = u - w; x <= u + w; x += 2) {
+      if (x < 0 || x >= frame.depth.cols || row[x] < raw_min || row[x] > raw_max) continue;
+      ++readings;
+      farthest = std::max(farthest, row[x]);
+    }
+  }
+  if (readings < options.min_readings) return false;
+  const double measured = farthest / frame.depth_scale, predicted = p_c.z();
+  const double sigma = std::hypot(noise.sigmaDepth(measured), noise.sigmaDepth(predicted));
+  return predicted - measured > std::max(options.sigmas * sigma, options.min_m);
+}
+
 std::string DepthIntegrity::describe() const {
   std::string text = std::to_string(seen_through) + " of " + std::to_string(checked) + " map points seen through in depth";
   if (missing_counted > 0) {

@@ -259,6 +259,7 @@ class Tracker::Impl {
     depth_reference_.reset();
     pending_keyframe_.reset();
     pending_local_map_.reset();
+    depth_agreeing_found_ = 0;
   }
 
  private:
@@ -283,6 +284,11 @@ class Tracker::Impl {
   void saveOutcome(std::vector<SlotOutcome>* outcome) const;
   void restoreOutcome(const std::vector<SlotOutcome>& outcome);
   void projectAll(const SE3& T_c_w);
+  // Leaves out of visible_ the points the frame's depth shows hidden behind a nearer surface
+  // (OcclusionOptions; depth modes): they are neither searched nor counted in the quality.
+  void dropHidden(const RgbdFrame& frame);
+  bool drop_hidden_ = true;  // this frame's attempts leave hidden points out (trackFrame)
+  int depth_agreeing_found_ = 0;  // the last accepted pose's found points agreeing with depth
   SE3 runStage(const std::vector<PointSlot*>& slots, const SE3& T_c_w, int radius_px,
                const RgbdFrame& frame, bool mark_inliers);
   void selectSubset(std::vector<PointSlot*>* slots, int max_count);
@@ -522,6 +528,15 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   prepareFrame(frame);
   frame_inconsistent_ = false;
   TrackResult tracked;
+  // Hidden points are left out only where the depth image vouches for the pose (the last
+  // one's found points agreeing with their readings, OcclusionOptions::min_agreeing), and
+  // only when tracking from the motion's prediction: a pose that puts the camera behind
+  // where it is makes every point ahead look hidden behind the surface it lies on, and,
+  // left out, those points would no longer count against that pose. (A safeguard by
+  // reasoning: after the wrong relocalisation of test_rgbd_slam_flight.sh's pinned
+  // settings, 1 m back, the frames that followed had 0-8 such points, and the run was the
+  // same without it.)
+  drop_hidden_ = state_ != TrackingState::kLost && depth_agreeing_found_ >= options_.occlusion.min_agreeing;
   if (replica_.map().numKeyframes() == 0) tracked = initialise(frame);
   else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
   else {
@@ -799,13 +814,13 @@ PoseIntegrity Tracker::Impl::integrityOf(const Attempt& attempt, const RgbdFrame
 }
 
 DepthIntegrity Tracker::Impl::depthIntegrityOf(const Attempt& attempt, const RgbdFrame& frame) {
+  for (PointSlot* slot : stage_) slot->depth_verdict = DepthVerdict::kUnchecked;  // none left from another attempt
   if (!options_.integrity.enabled || !depthInTracking(mode_) || frame.depth.empty()) return DepthIntegrity{};
   // Points seen through at most of their accepted poses (glass, wrong points) say nothing.
   integrity_points_.clear();
   integrity_slots_.clear();
   reading_expected_.clear();
   for (PointSlot* slot : stage_) {
-    slot->depth_verdict = DepthVerdict::kUnchecked;
     if (slot->point->depth_record.mostlySeenThrough()) continue;
     integrity_points_.push_back(slot->point->p_w);
     integrity_slots_.push_back(slot);
@@ -1274,8 +1289,13 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   last_quality_ = attempt.quality;
   state_ = state == TrackingState::kRelocalised ? TrackingState::kTracking : state;
   updateDepthReference(attempt, frame);
+  // A relocalised pose vouches for nothing yet: hidden points are left out from the frame
+  // after the next pose tracked from the motion's prediction (trackFrame).
+  const bool vouches = state != TrackingState::kRelocalised;
+  depth_agreeing_found_ = 0;
   for (PointSlot* slot : stage_) {
     if (slot->depth_verdict != DepthVerdict::kUnchecked) {
+      depth_agreeing_found_ += vouches && slot->found && slot->depth_verdict == DepthVerdict::kAgrees;
       slot->point->depth_record.add(slot->depth_verdict, (T_c_w_ * slot->point->p_w).z());
       slot->depth_verdict = DepthVerdict::kUnchecked;
     }
@@ -1353,6 +1373,7 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
   for (PointSlot& slot : replica_.slots()) slot.searched = slot.found = false;
   SE3 T_c_w = T_c_w_start;
   projectAll(T_c_w);
+  dropHidden(frame);
   stage_.clear();
   for (PointSlot* slot : visible_) {
     if (slot->search_level >= options_.coarse.min_level) stage_.push_back(slot);
@@ -1366,6 +1387,7 @@ Attempt Tracker::Impl::trackFrom(const SE3& T_c_w_start, const RgbdFrame& frame,
     T_c_w = runStage(stage_, T_c_w, options_.coarse.radius_px, frame, false);
     for (PointSlot* slot : stage_) slot->searched = slot->found = false;
     projectAll(T_c_w);
+    dropHidden(frame);
   }
   stage_ = visible_;
   selectSubset(&stage_, options_.fine.max_points);
@@ -1413,6 +1435,17 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
       ++points_in_view_[kf];
     }
   }
+}
+
+void Tracker::Impl::dropHidden(const RgbdFrame& frame) {
+  if (!drop_hidden_ || !options_.occlusion.enabled || !depthInTracking(mode_) || frame.depth.empty()) return;
+  const KeyframeBuildOptions& range = options_.keyframe_build;
+  visible_.erase(std::remove_if(visible_.begin(), visible_.end(),
+                                [&](const PointSlot* slot) {
+                                  return hiddenInDepth(slot->p_c, slot->uv, frame, options_.pose.noise,
+                                                       range.min_depth_m, range.max_depth_m, options_.occlusion);
+                                }),
+                 visible_.end());
 }
 
 // Searches the slots and updates the pose by Gauss-Newton on the found ones. With

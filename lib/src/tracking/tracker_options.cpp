@@ -109,6 +109,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "of the last pose; farther lookalike places are refused (0: anywhere)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
+  occlusion.bind(r, s);
   photometric.bind(r, s);
   depth_align.bind(r, s);
   reloc_features.bind(r, s);

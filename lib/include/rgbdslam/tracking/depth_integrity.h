@@ -83,4 +83,44 @@ DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3&
                                    std::vector<DepthVerdict>* verdicts = nullptr,
                                    const std::vector<uint8_t>* reading_expected = nullptr);
 
+// Points hidden behind a nearer surface are not searched (issue 11: the flight's rooms and
+// corridors). PTAM searches every map point whose projection falls in the image, so a
+// keyframe's points on the far side of a wall are searched where the wall stands in front
+// of them; they are not found, and the frame's quality (found / searched) falls as if the
+// pose were wrong. With depth the wall is measured: a point is hidden when every reading
+// around its projection (the window, sampled every other pixel, so that a prediction a few
+// pixels off still finds the surface the point lies on) is nearer than the point by more
+// than the depth noise of both (sigmas of their combined sigma, at least min_m). Where the
+// window has few readings (holes, the range exceeded) nothing is decided: the point is
+// searched as before.
+// Measured (2026-11-27, points searched anyway and counted): on teddy 18 % of the points
+// searched were hidden by this rule, and 1.9 % of those were found (of all points: 27 %);
+// on the flight's first 720 frames (world 13) 0.3 % were, 3.8 % of them found (of all: 93 %).
+// On the 2-minute flight, world 3, turning at the store's east end (frames 2120-2122), the
+// quality of the pose fell from 0.88 to 0.10 with 20-28 points found, and the tracker was
+// lost until frame 2246; with the rule it stayed at 0.92-0.94.
+// A pose that puts the camera behind where it is makes the points ahead look hidden too,
+// so the tracker leaves hidden points out only where the depth image vouches for the pose
+// (min_agreeing) and never while relocalising (tracker.cpp, trackFrame).
+struct OcclusionOptions {
+  bool enabled = true;     // in the modes that track with depth
+  int window_px = 4;       // readings within this of the projection, every other pixel (even) [px]
+  int min_readings = 8;    // fewer of the window's samples (25 at 4 px) with a reading: not hidden
+  double sigmas = 3.0;     // nearer than the point by this many sigmas of the depth noise [sigmas]
+  double min_m = 0.1;      // ...and by at least this [m]
+  // ...and only where the last accepted pose, tracked from the motion's prediction (not a
+  // relocalisation), had at least this many found points whose readings agreed with it, by
+  // the integrity check's verdicts (so not with that check off; the tracker, trackFrame:
+  // why) [points].
+  int min_agreeing = 10;
+
+  void bind(OptionRegistry* registry, const std::string& section);  // as occlusion_*
+};
+
+// Whether the frame's depth shows a surface in front of the camera-frame point 'p_c'
+// projected at 'uv' (level 0), by OcclusionOptions; readings outside [min_depth_m,
+// max_depth_m] count as none. False without a depth image.
+bool hiddenInDepth(const Vec3& p_c, const Eigen::Vector2d& uv, const RgbdFrame& frame, const NoiseModel& noise,
+                   double min_depth_m, double max_depth_m, const OcclusionOptions& options);
+
 }  // namespace rgbdslam

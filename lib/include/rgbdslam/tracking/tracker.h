@@ -181,6 +181,7 @@ struct TrackerOptions {
   double relocalise_max_speed_m_s = 3.0;  // [m/s]
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
+  OcclusionOptions occlusion;       // points behind a nearer surface not searched (depth modes)
   PhotometricIntegrityOptions photometric;  // every pose against the image (every mode)
   DepthAlignmentOptions depth_align;  // depth where the points are too few (depth modes)
   FeatureRelocaliserOptions reloc_features;  // relocalisation from anywhere (depth modes)
