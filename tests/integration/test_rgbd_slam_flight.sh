@@ -19,12 +19,20 @@
 # frames after the recovery the pose rests on 6-26 points (quality 0.14-0.36) and the map
 # is corrected by 12-24 cm after it; the bound below (0.1 m) still holds, and the control
 # still fails to recover (under 690 posed).
+# Occlusion and the viewing direction (tracker.occlusion_check, tracker.max_view_angle_deg,
+# on since 2026-11-27, session 27) change the map before the cover; with them on and the
+# settings above, the tracker relocalises at frame 655 at the last pose, 1 m back (31
+# points found, quality 0.22), and tracks on from there: 704 posed at ATE 0.91 m. So both
+# are pinned off too, which gives the run measured above (705 / 705, 61.9 mm; the control
+# 640 posed). With every default the cover is recovered at seed 1 (705 posed, 5.8 mm) and
+# lost for good at seeds 2 and 3 (tracker.random_seed: 640 and 641 posed).
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.1
 
 SPEC=flight,frames=720,cover=640-654
 KEYS="frames|poses|relocalisations|ate_rmse_m|jumps_while_tracking"
-PINNED=(--set tracker.motion_prior=false --set tracker.retry_with_coarse=false --set tracker.retry_without_sbi=false)
+PINNED=(--set tracker.motion_prior=false --set tracker.retry_with_coarse=false --set tracker.retry_without_sbi=false
+        --set tracker.occlusion_check=false --set tracker.max_view_angle_deg=0)
 run_slam coasting "$SPEC" "$KEYS" "${PINNED[@]}"
 [ "$(summary_value coasting frames)" -eq 720 ] || fail "rgbd-slam saw $(summary_value coasting frames) frames, expected 720"
 [ "$(summary_value coasting poses)" -ge 690 ] || fail "only $(summary_value coasting poses) of 720 frames posed (705 uncovered)"

@@ -22,6 +22,7 @@ void makeKeyframeViews(const Map& map, const SE3& T_c_w, std::vector<KeyframeVie
     view.R_cur_src = R_c_w * R_src_w.transpose();
     view.src_z_row = R_src_w.row(2);
     view.src_z_offset = T_src_w.translation().z();
+    view.centre_c = T_c_w * keyframe->T_w_c.translation();
   }
 }
 
@@ -65,6 +66,11 @@ bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
   const KeyframeView& view = views[kf];
   const double z_src = view.src_z_row.dot(point.p_w) + view.src_z_offset;
   if (!(z_src > options.min_depth_m)) return false;
+  if (options.max_view_angle_deg > 0.0) {
+    const Vec3 from_src = slot->p_c - view.centre_c;  // both rays in the current camera's frame
+    const double cos_angle = slot->p_c.dot(from_src) / (slot->p_c.norm() * from_src.norm());
+    if (!(cos_angle >= std::cos(options.max_view_angle_deg * M_PI / 180.0))) return false;
+  }
   // A source-pixel step on the fronto-parallel plane at depth z_src moves the point by
   // z_src * d_m_d_uv in the source camera (x, y); seen from here through R_cur_src.
   const Eigen::Matrix<double, 3, 2> d_psrc_d_uvsrc =
@@ -139,6 +145,8 @@ std::optional<cv::Point2i> searchDense(const Patch& patch, const cv::Mat& image,
 void ProjectionOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "image_margin_px", &margin_px, 0, 100, "px",
           "projected points closer than this to the image border are not searched");
+  r->bind(s, "max_view_angle_deg", &max_view_angle_deg, 0.0, 180.0, "deg",
+          "points seen from a direction farther than this from their source keyframe's are not searched (0: any)");
 }
 
 void PointSearchOptions::bind(OptionRegistry* r, const std::string& s) {

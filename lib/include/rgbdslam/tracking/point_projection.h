@@ -24,14 +24,16 @@
 
 namespace rgbdslam {
 
-// Per-frame data of one keyframe: the rotation from its camera to the current camera and
-// the third row of its T_c_w (for the point's depth in the source camera).
+// Per-frame data of one keyframe: the rotation from its camera to the current camera, the
+// third row of its T_c_w (for the point's depth in the source camera) and its camera's
+// centre seen from the current camera (for the viewing-direction bound).
 struct KeyframeView {
   bool valid = false;
   bool cold = false;  // the keyframe has no pyramid now (map_replica.h): its points have no slot
   Mat3 R_cur_src = Mat3::Identity();
   Eigen::RowVector3d src_z_row = Eigen::RowVector3d::Zero();  // z_src = row . p_w + t_z
   double src_z_offset = 0.0;
+  Vec3 centre_c = Vec3::Zero();  // the keyframe camera's centre in the current camera's frame
 };
 
 // Indexed by keyframe id (ids are dense from 0).
@@ -76,8 +78,14 @@ bool initSlot(const Map& map, const PinholeCamera& camera, MapPoint* point, Poin
 struct ProjectionOptions {
   int margin_px = 8;              // inside the image by this much [px]
   double min_depth_m = 0.05;      // in front of the camera by this much [m]
+  // A point seen from a direction this far from its source keyframe's is not searched: its
+  // patch, warped as if it faced the source camera, no longer looks like the point there
+  // (0: any direction). ORB-SLAM bounds the angle to a point's mean viewing direction by
+  // 60 deg; here the reference is the source keyframe, whose patch is searched for. Every
+  // mode, mono too.
+  double max_view_angle_deg = 60.0;  // [deg]
 
-  void bind(OptionRegistry* registry, const std::string& section);  // margin_px only
+  void bind(OptionRegistry* registry, const std::string& section);  // margin_px, max_view_angle_deg
 };
 
 // Whether p_w lies in front of the camera at T_c_w and projects into the image (with margin):
