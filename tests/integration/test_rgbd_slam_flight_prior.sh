@@ -5,8 +5,8 @@
 # not fix it, and again at 712-713, 715 and 717-718 (710 posed at 64 mm); with it (tracker.motion_prior,
 # motion_prior.h) the flight keeps its pose: measured 2026-11-27 with the occlusion rule and
 # the viewing bound on (session 27), 720 / 720 posed, ATE 5.5 mm. (World 8, this test's
-# world before them, no longer needs the prior: 720 posed at 7.0 mm without it, as worlds 10,
-# 12 and 13 before; over worlds 1-20 without the prior worlds 2 and 11 lose frames (710
+# world before them, no longer needs the prior: 720 posed at 7.0 mm without it, nor do worlds
+# 12 and 13 (world 10 since session 26); over worlds 1-20 without the prior worlds 2 and 11 lose frames (710
 # and 719 posed), worlds 1, 6 and 7 end at 9-13 mm against 4.5-5.2 with it; docs/open_work.md, session 27.)
 source "$(dirname "$0")/common.sh"
 ATE_BOUND_M=0.010
