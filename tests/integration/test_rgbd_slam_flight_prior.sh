@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The flight's first 720 frames in its second world (synth:flight,frames=720,seed=2): corridor
 # C1 at 2 m/s from frame 540, weakly textured walls and the hall's far wall beyond the depth
-# range ahead. Without the motion prior the pose is lost at frame 704 with 58 points that do
-# not fix it, and again at 712-713, 715 and 717-718 (710 posed at 64 mm); with it (tracker.motion_prior,
+# range ahead. Without the motion prior the pose is lost at frames 704-708 (at 704 58
+# points found do not fix it), 712-713, 715 and 717-718 (710 posed at 64 mm); with it (tracker.motion_prior,
 # motion_prior.h) the flight keeps its pose: measured 2026-11-27 with the occlusion rule and
 # the viewing bound on (session 27), 720 / 720 posed, ATE 5.5 mm. (World 8, this test's
 # world before them, no longer needs the prior: 720 posed at 7.0 mm without it, nor do worlds
