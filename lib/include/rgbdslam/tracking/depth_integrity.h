@@ -96,9 +96,9 @@ DepthIntegrity checkDepthIntegrity(const std::vector<Vec3>& points_w, const SE3&
 // Measured (2026-11-27, points searched anyway and counted): on teddy 18 % of the points
 // searched were hidden by this rule, and 1.9 % of those were found (of all points: 27 %);
 // on the flight's first 720 frames (world 13) 0.3 % were, 3.8 % of them found (of all: 93 %).
-// On the 2-minute flight, world 3, turning at the store's east end (frames 2120-2122), the
+// On the 2-minute flight, world 3, turning at the store's east end (frames 2117-2122), the
 // quality of the pose fell from 0.88 to 0.10 with 20-28 points found, and the tracker was
-// lost until frame 2246; with the rule it stayed at 0.92-0.94.
+// lost until frame 2246; with the rule it stays at 0.92-0.96 there.
 // A pose that puts the camera behind where it is makes the points ahead look hidden too,
 // so the tracker leaves hidden points out only where the depth image vouches for the pose
 // (min_agreeing) and never while relocalising (tracker.cpp, trackFrame).
