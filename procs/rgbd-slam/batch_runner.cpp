@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "common/frame_log.h"
+#include "common/link_budget.h"
 #include "common/map_start.h"
 #include "common/process.h"
 #include "common/source_factory.h"
@@ -79,6 +80,11 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   o.load_map = cli.has("load-map") ? cli.get("load-map") : "";
   o.localise_only = cli.has("localise-only");
   if (o.localise_only && o.load_map.empty()) return Error{"--localise-only needs --load-map FILE (the map to localise in)"};
+  const TrackerProcessOptions& node = o.config.procs->tracker_node;
+  const auto rungs = static_cast<long>(encodingLadder(node.bestEncoding(), node.link_budget.min_jpeg_quality).size());
+  auto rung = cli.getInt("keyframe-rung", -1, rungs - 1);
+  if (!rung) return Error{rung.error() + " (this configuration's ladder has " + std::to_string(rungs) + " rungs)"};
+  o.keyframe_rung = static_cast<int>(*rung);
   // Found out at the start, not after the whole run.
   const std::filesystem::path save_dir = std::filesystem::path(o.save_map).parent_path();
   if (!o.save_map.empty() && !save_dir.empty() && !std::filesystem::is_directory(save_dir)) {
@@ -144,9 +150,29 @@ BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
               << (options_.localise_only ? ", localising only" : "") << "\n";
   }
   const auto start = std::chrono::steady_clock::now();
+  SlamStart slam_start{start_map, options_.localise_only, {}};
+  if (options_.keyframe_rung >= 0) {
+    const TrackerProcessOptions& node = options_.config.procs->tracker_node;
+    const KeyframeEncoding encoding = encodingLadder(node.bestEncoding(), node.link_budget.min_jpeg_quality)
+        [static_cast<size_t>(options_.keyframe_rung)];
+    slam_start.keyframe_wire = [this, encoding](const KeyframeData& k) { return throughWire(k, encoding); };
+  }
   slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic, options_.link,
-                                       SlamStart{start_map, options_.localise_only});
+                                       slam_start);
   map_start_ms_ = msSince(start);
+}
+
+// The keyframe as rgbd-mapper would decode it from rgbd-tracker's message. A message that
+// does not decode is counted and reported, and the keyframe goes on as it was: a codec
+// fault must show in the figures, not end the run.
+KeyframeData BatchRunner::throughWire(const KeyframeData& keyframe, const KeyframeEncoding& encoding) {
+  const rgbdslam::keyframe_t message = toLcm(keyframe, encoding);
+  ++wire_keyframes_;
+  wire_bytes_ += message.getEncodedSize();
+  Expected<KeyframeData> decoded = fromLcm(message);
+  if (decoded) return std::move(*decoded);
+  if (wire_errors_++ == 0) std::cerr << "rgbd-slam: keyframe " << keyframe.id << " does not decode: " << decoded.error() << "\n";
+  return keyframe;
 }
 
 void BatchRunner::showProgress(const TrackResult& result, bool final_line) {
@@ -248,6 +274,10 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
               stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.maps_stale,
               stats.snapshots, stats.link_lost);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
+  if (options_.keyframe_rung >= 0) {
+    std::printf("keyframe_rung %d\nkeyframe_wire_kb_mean %.1f\nkeyframe_wire_errors %ld\n", options_.keyframe_rung,
+                wire_keyframes_ > 0 ? static_cast<double>(wire_bytes_) / wire_keyframes_ / 1000.0 : 0.0, wire_errors_);
+  }
   for (TrackingState state : {TrackingState::kInitialising, TrackingState::kTracking, TrackingState::kDodgy,
                               TrackingState::kLost, TrackingState::kRelocalised}) {
     const auto it = state_frames_.find(state);

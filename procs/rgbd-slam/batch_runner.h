@@ -9,6 +9,7 @@
 
 #include "common/cli.h"
 #include "common/frame_log.h"
+#include "common/lcm_conversions.h"
 #include "common/loss_report.h"
 #include "common/slam_config.h"
 #include "rgbdslam/camera/pinhole_camera.h"
@@ -32,6 +33,10 @@ struct BatchOptions {
   std::string save_map;                    // map file written at the end; empty: none
   std::string load_map;                    // map file to start from; empty: a new map
   bool localise_only = false;              // with load_map: add nothing to it
+  // >= 0: keyframes reach the mapper encoded and decoded at this rung of rgbd-tracker's
+  // encoding ladder (0: tracker_node.keyframe_*; higher: coarser, common/link_budget.h);
+  // -1: as the tracker made them.
+  int keyframe_rung = -1;
 
   static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
 };
@@ -46,6 +51,7 @@ class BatchRunner {
   BatchRunner(BatchOptions options, PinholeCamera camera, std::unique_ptr<FrameSource> source,
               std::optional<Trajectory> groundtruth, const LoadedMap* start_map);
   bool saveMapIfAsked();
+  KeyframeData throughWire(const KeyframeData& keyframe, const KeyframeEncoding& encoding);
   void printMapFileSummary() const;
   void showProgress(const TrackResult& result, bool final_line);
   void printSummary(const Trajectory& trajectory) const;
@@ -68,6 +74,8 @@ class BatchRunner {
   long map_saved_bytes_ = 0;
   long first_pose_frame_ = 0;    // frames read up to and including the first with a pose
   double first_pose_ms_ = -1.0;  // from the start of the run to that pose [ms]; -1: none
+  // --keyframe-rung: what the link's codec sent.
+  long wire_keyframes_ = 0, wire_bytes_ = 0, wire_errors_ = 0;
   LossReport loss_;  // logged even with --quiet: losing tracking is an event, not progress
 };
 

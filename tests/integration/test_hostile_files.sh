@@ -31,6 +31,8 @@ done
 expect 2 "list.yaml: the top level must be a mapping" rgbd-capture --source "tum:$SEQ" --camera "$WORK/list.yaml"
 expect 2 "list.yaml: the top level must be a mapping" rgbd-slam --source "tum:$SEQ" --camera "$WORK/list.yaml" --output "$WORK/t.txt"
 expect 2 "list.yaml: the top level must be a mapping" rgbd-slam --source synth:room,frames=3 --config "$WORK/list.yaml" --output "$WORK/t.txt"
+expect 2 "keyframe-rung: 6 is outside" rgbd-slam --source synth:room,frames=3 --output "$WORK/t.txt" --keyframe-rung 6
+expect 2 "keyframe-rung" rgbd-slam --source synth:room,frames=3 --output "$WORK/t.txt" --keyframe-rung x
 sed 's/^image_width: .*/image_width: 1e12/' "$CAMERA" > "$WORK/wide.yaml"
 expect 2 "key 'image_width' is 1e+12, must be a whole number" rgbd-tracker --camera "$WORK/wide.yaml"
 

@@ -48,7 +48,7 @@ class SlamSystem::Impl {
   Impl(const PinholeCamera& camera, const SlamOptions& options, bool deterministic,
        const LinkOptions& link, const SlamStart& start)
       : options_(options), mode_(*parseSlamMode(options.mode)), deterministic_(deterministic),
-        localise_only_(start.map && start.localise_only),
+        localise_only_(start.map && start.localise_only), keyframe_wire_(start.keyframe_wire),
         tracker_(camera, options.tracker, mode_, kMapId),
         tracker_sync_(kMapId, withoutRetention(options.sync.outbox)),
         mapper_(camera, options.mapper, mode_),
@@ -130,8 +130,10 @@ class SlamSystem::Impl {
   }
 
   // The tracker's end.
-  void sendKeyframe(const KeyframeData& keyframe, int64_t now_us) {
+  void sendKeyframe(const KeyframeData& sent, int64_t now_us) {
     ++stats_.keyframe_sends;
+    // The copy shares the images (cv::Mat); the link's codec, if any, makes new ones.
+    const KeyframeData keyframe = keyframe_wire_ ? keyframe_wire_(sent) : sent;
     if (deterministic_) {
       keyframe_link_.send(keyframe, now_us);
       return;
@@ -210,6 +212,7 @@ class SlamSystem::Impl {
   SlamMode mode_;
   bool deterministic_;
   bool localise_only_;
+  std::function<KeyframeData(const KeyframeData&)> keyframe_wire_;  // SlamStart::keyframe_wire
   Tracker tracker_;
   TrackerSync<KeyframeData> tracker_sync_;
   Mapper mapper_;

@@ -20,7 +20,12 @@
 //   frame (Tracker::load, Mapper::load) and the protocol continues after its keyframes. To
 //   localise only, the tracker adds no keyframes and the mapper is not run: its map stays
 //   the loaded one.
+// What the link's codec does to a keyframe on its way to the mapper (SlamStart::keyframe_wire):
+//   rgbd-tracker sends keyframes as JPEG grey and coarse depth (procs/common/link_budget.h);
+//   the batch runner can pass every keyframe through the same encoding and decoding, so that
+//   the map is built from what a ground station receives, deterministically.
 // Call order: construct, process() per frame, finish() (waits for the mapper), then map().
+#include <functional>
 #include <memory>
 
 #include "rgbdslam/mapping/mapper.h"
@@ -46,6 +51,9 @@ struct SlamOptions {
 struct SlamStart {
   const LoadedMap* map = nullptr;  // read during construction only
   bool localise_only = false;      // with a map: track in it, add nothing
+  // Each keyframe as the mapper receives it (encoded and decoded as on the link); empty: the
+  // tracker's keyframe itself. Called on the tracking thread, for first sends and re-sends.
+  std::function<KeyframeData(const KeyframeData&)> keyframe_wire;
 };
 
 struct SlamStats {
