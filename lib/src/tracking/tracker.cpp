@@ -424,6 +424,11 @@ class Tracker::Impl {
   // How far from the last pose the camera can be by 'frame' (TrackerOptions::
   // relocalise_max_speed_m_s); infinite when unbounded.
   double relocaliseReachM(const RgbdFrame& frame) const;
+  // How far the velocity at the loss has carried the camera from the last pose [m].
+  double lostTravelM() const {
+    const SE3 coasted = SE3::exp(static_cast<double>(lost_frames_) * lost_velocity_) * T_c_w_;
+    return (coasted.inverse().translation() - T_c_w_.inverse().translation()).norm();
+  }
   bool withinReach(const SE3& T_c_w, double reach_m) const {
     return (T_c_w.inverse().translation() - T_c_w_.inverse().translation()).norm() <= reach_m;
   }
@@ -771,8 +776,11 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, coasted.inverse()});
   }
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
-  for (const RelocalisationCandidate& candidate : candidates) {
+  const bool last_pose_in_reach = lostTravelM() <= options_.relocalise_last_pose_reach_m;
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const RelocalisationCandidate& candidate = candidates[i];
     const bool near_last = candidate.keyframe < 0;
+    const bool dodgy_enough = near_last && (i > 0 || last_pose_in_reach);  // [0]: the last pose
     const SE3 start = candidate.T_w_c.inverse();
     if (!near_last) updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
     // From a keyframe's view the camera may be anywhere near: the wide coarse search first.
@@ -789,8 +797,9 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     // it. From the last pose the bar is normal tracking's (dodgy is enough, the pose must be
     // fixed): where many points are hidden or unmatchable for a stretch (the corridor's
     // glass cabinets close by) the quality stays below good although the pose is right,
-    // and a tracker that lost such a stretch once would otherwise never come back.
-    if (isLost(attempt) || (!near_last && attempt.quality < options_.quality.good)) continue;
+    // and a tracker that lost such a stretch once would otherwise never come back. But not
+    // once the camera has coasted out of the last pose's reach (relocalise_last_pose_reach_m).
+    if (isLost(attempt) || (!dodgy_enough && attempt.quality < options_.quality.good)) continue;
     if (!withinReach(attempt.T_c_w, reach_m)) continue;       // a lookalike place
     if (!integrityOf(attempt, frame).consistent()) continue;  // a wrong pose is worse than none
     velocity_.setZero();

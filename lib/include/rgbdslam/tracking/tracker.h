@@ -170,6 +170,15 @@ struct TrackerOptions {
   // loss the tracker also tries the pose the velocity at the loss carried it to (the flight's
   // first 720 frames: ATE 10.5 mm instead of 0.63 m). 0: the last pose only.
   int relocalise_coast_frames = 30;  // [frames]
+  // A pose found from the last pose is accepted on normal tracking's bar (dodgy is enough):
+  // right after a loss the camera is still near it, and where many points are hidden for a
+  // stretch (glass cabinets close by) the quality stays below good although the pose is
+  // right. Once the velocity at the loss has carried the camera farther than this from the
+  // last pose, beyond the fine stage's reach (see above), tracking from there can only find
+  // a lookalike nearby (a corridor 1 m back, after a 0.5 s cover at 2 m/s: quality 0.21,
+  // 31 points found, and the map built on from there), so it must be good, as from a
+  // keyframe's view. 0: always good; a large value: always dodgy enough.
+  double relocalise_last_pose_reach_m = 0.3;  // [m]
   // Nor does it fly faster than it can: a relocalised pose must lie within this speed times
   // the time since the last pose (plus 1 m for that pose's own error) of the last pose, and
   // only keyframes within that reach plus the sensor's depth range are candidates. Without
