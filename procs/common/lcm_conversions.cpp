@@ -5,8 +5,6 @@
 #include <cstdio>
 #include <cstring>
 
-#include <opencv2/imgproc.hpp>
-
 #include "common/protocol_limits.h"
 #include "rgbdslam/image/codec.h"
 #include "rgbdslam/image/corners.h"
@@ -127,65 +125,6 @@ Status copyRaw(const std::vector<uint8_t>& bytes, int width, int height, int typ
   return Status{};
 }
 
-// Where pixel 'p' lies between the samples of subsampleDepth along an axis of 'size' pixels
-// and 'samples' samples: the samples before and after it and the weight of the one after.
-// Before the first sample's centre or after the last one's, both are that sample.
-struct Between {
-  int before = 0, after = 0;
-  double weight = 0.0;
-};
-int sampleCentre(int i, int step, int size) { return std::min(step * i + step / 2, size - 1); }
-Between between(int p, int step, int samples, int size) {
-  Between b;
-  if (p <= sampleCentre(0, step, size)) return b;
-  b.before = std::min((p - step / 2) / step, samples - 1);
-  b.after = std::min(b.before + 1, samples - 1);
-  const int c0 = sampleCentre(b.before, step, size), c1 = sampleCentre(b.after, step, size);
-  if (c1 <= c0) {
-    b.after = b.before;
-    return b;
-  }
-  b.weight = std::clamp(static_cast<double>(p - c0) / (c1 - c0), 0.0, 1.0);
-  return b;
-}
-
-// The four samples around a pixel agree when their depths spread by at most this fraction of
-// the nearest: the discontinuity bound of points from depth (model/point_creation.h,
-// depth_points_discontinuity). A wall seen at 80 deg off its normal spreads by 4 % over a
-// 4-pixel step at 3 m; a depth edge spreads by far more.
-constexpr double kSamplesAgree = 0.05;
-
-}  // namespace
-
-cv::Mat expandSubsampledDepth(const cv::Mat& sparse, int step, int width, int height) {
-  cv::Mat depth(height, width, CV_16UC1);
-  std::vector<Between> columns(static_cast<size_t>(width));
-  for (int u = 0; u < width; ++u) columns[static_cast<size_t>(u)] = between(u, step, sparse.cols, width);
-  for (int v = 0; v < height; ++v) {
-    const Between row = between(v, step, sparse.rows, height);
-    const uint16_t* above = sparse.ptr<uint16_t>(row.before);
-    const uint16_t* below = sparse.ptr<uint16_t>(row.after);
-    const uint16_t* nearest_row = sparse.ptr<uint16_t>(std::min(v / step, sparse.rows - 1));
-    uint16_t* out = depth.ptr<uint16_t>(v);
-    for (int u = 0; u < width; ++u) {
-      const Between& col = columns[static_cast<size_t>(u)];
-      const double d[4] = {static_cast<double>(above[col.before]), static_cast<double>(above[col.after]),
-                           static_cast<double>(below[col.before]), static_cast<double>(below[col.after])};
-      const double lo = std::min({d[0], d[1], d[2], d[3]}), hi = std::max({d[0], d[1], d[2], d[3]});
-      if (lo <= 0.0 || hi - lo > kSamplesAgree * lo) {
-        out[u] = nearest_row[std::min(u / step, sparse.cols - 1)];
-        continue;
-      }
-      const double a = col.weight, b = row.weight;
-      const double inverse = (1 - b) * ((1 - a) / d[0] + a / d[1]) + b * ((1 - a) / d[2] + a / d[3]);
-      out[u] = static_cast<uint16_t>(std::lround(1.0 / inverse));
-    }
-  }
-  return depth;
-}
-
-namespace {
-
 // Raw, zlib or inverse-depth bytes -> CV_16UC1 at depth_scale units per metre; formats as
 // in rgbd_frame_t / keyframe_t.
 Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, int width,
@@ -210,7 +149,13 @@ Expected<cv::Mat> decodeDepth(int8_t format, const std::vector<uint8_t>& bytes, 
     auto sparse = inverse ? decompressInverseDepth(bytes.data(), bytes.size(), sparse_width, sparse_height, depth_scale)
                           : decompressDepth(bytes.data(), bytes.size(), sparse_width, sparse_height);
     if (!sparse) return Error{"subsampled depth: " + sparse.error()};
-    return expandSubsampledDepth(*sparse, step, width, height);
+    cv::Mat depth(height, width, CV_16UC1);
+    for (int v = 0; v < height; ++v) {
+      const uint16_t* in = sparse->ptr<uint16_t>(v / step);
+      uint16_t* out = depth.ptr<uint16_t>(v);
+      for (int u = 0; u < width; ++u) out[u] = in[u / step];
+    }
+    return depth;
   }
   if (format != rgbdslam::rgbd_frame_t::DEPTH_RAW_U16) {
     return Error{"unknown depth format " + std::to_string(format)};
@@ -387,7 +332,8 @@ Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg) {
 namespace {
 
 // The centre pixel of each step x step block (no averaging: a mean across a depth edge would
-// invent a surface that is not there); expanded again by expandSubsampledDepth.
+// invent a surface that is not there); expanded again by repetition, every pixel then reads
+// a measured depth at most step / 2 pixels away.
 cv::Mat subsampleDepth(const cv::Mat& depth, int step) {
   cv::Mat sparse((depth.rows + step - 1) / step, (depth.cols + step - 1) / step, CV_16UC1);
   for (int v = 0; v < sparse.rows; ++v) {
@@ -412,10 +358,7 @@ cv::Mat depthNearCorners(const cv::Mat& depth, const cv::Mat& grey, int step) {
   std::vector<LevelCorners> corners;
   detectPyramidCorners(buildPyramid(grey), lossyCornerOptions(CornerOptions{}, kDepthCornerMargin),
                        /*with_maxima=*/false, &corners);
-  // A pixel of a block the corners reach reads the samples of the blocks beside it too, where
-  // its depth is interpolated (expandSubsampledDepth): those are kept as well.
-  cv::Mat mask;
-  cv::dilate(cornerBlockMask(corners, step, grey.size()), mask, cv::Mat::ones(3, 3, CV_8UC1));
+  const cv::Mat mask = cornerBlockMask(corners, step, grey.size());
   cv::Mat out = depth.clone();
   if (mask.size() == out.size()) out.setTo(0, mask == 0);
   return out;

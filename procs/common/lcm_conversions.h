@@ -61,23 +61,12 @@ struct KeyframeEncoding {
   // image/codec.h); 0: zlib, lossless.
   double inverse_depth_step = 0.0;
   // Depth only in the blocks a FAST corner of the grey image reaches (cornerBlockMask;
-  // corners a little below the default thresholds, lcm_conversions.cpp) and the blocks
-  // beside them (whose samples the expansion interpolates from), no reading elsewhere: all
-  // the mapper reads; the whole depth where that is no larger. A corridor frame at the
-  // quarter step: 6.6 -> 4.2 kB.
+  // corners a little below the default thresholds, lcm_conversions.cpp), no reading
+  // elsewhere: all the mapper reads; the whole depth where that is no larger. A corridor
+  // frame at the quarter step: 6.6 -> 4.1 kB.
   bool depth_near_corners = false;
 };
 rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding& encoding = {});
-// Depth at every step-th pixel and row (the centre of each block, keyframe_t's subsampled
-// formats) back to width x height. A pixel between four samples that agree (no depth edge
-// between them) takes their inverse depth interpolated bilinearly, which is exact on a
-// plane: inverse depth is affine in the pixel coordinates there. Elsewhere (a depth edge,
-// a sample without reading, the border) it takes the sample of its block, as repetition
-// would: no surface is invented between two. Why not repetition everywhere: the mapper
-// reads the depth of a measurement at its own pixel, and a reading up to step / 2 pixels
-// away is off by the surface's slope times that (the corridor's walls, seen at a grazing
-// angle: docs/open_work.md, session 28).
-cv::Mat expandSubsampledDepth(const cv::Mat& sparse, int step, int width, int height);
 Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg);
 
 rgbdslam::map_t toLcm(const MapUpdate& update);
