@@ -162,7 +162,8 @@ BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
   map_start_ms_ = msSince(start);
 }
 
-// The keyframe as rgbd-mapper would decode it from rgbd-tracker's message. A message that
+// The keyframe as rgbd-mapper would decode it from rgbd-tracker's message (re-sends over a
+// lossy simulated link are encoded and counted again, as on the radio). A message that
 // does not decode is counted and reported, and the keyframe goes on as it was: a codec
 // fault must show in the figures, not end the run.
 KeyframeData BatchRunner::throughWire(const KeyframeData& keyframe, const KeyframeEncoding& encoding) {

@@ -20,7 +20,7 @@ CommandLine makeCommandLine() {
   cli.option("link-loss", "P", "deterministic: tracker and mapper talk over a simulated link losing this fraction of messages each way [0-1]", "0");
   cli.option("link-delay-ms", "MS", "deterministic: ...delaying every message this long, in the frames' time [ms]", "0");
   cli.option("link-seed", "N", "deterministic: seed of the simulated link's losses", "1");
-  cli.option("keyframe-rung", "N", "keyframes reach the mapper encoded and decoded as rgbd-tracker sends them, at this rung of its encoding ladder (0: tracker_node.keyframe_*; each higher rung coarser, as the link budget chooses: procs/common/link_budget.h); -1: as the tracker made them", "-1");
+  cli.option("keyframe-rung", "N", "keyframes reach the mapper encoded and decoded as rgbd-tracker sends them, at this rung of its encoding ladder (0: tracker_node.keyframe_*; each higher rung coarser, as the link budget chooses: procs/common/link_budget.h; encoded in the frame loop after the pose, outside track_ms); -1: as the tracker made them", "-1");
   addSlamConfigOptions(cli);
   cli.option("groundtruth", "FILE", "ground truth in TUM format", "the source's own, if any");
   cli.option("max-frames", "N", "stop after N frames; 0 = all", "0");

@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "rgbdslam/sync/mapper_sync.h"
@@ -132,8 +133,9 @@ class SlamSystem::Impl {
   // The tracker's end.
   void sendKeyframe(const KeyframeData& sent, int64_t now_us) {
     ++stats_.keyframe_sends;
-    // The copy shares the images (cv::Mat); the link's codec, if any, makes new ones.
-    const KeyframeData keyframe = keyframe_wire_ ? keyframe_wire_(sent) : sent;
+    std::optional<KeyframeData> wired;  // through the link's codec (SlamStart::keyframe_wire)
+    if (keyframe_wire_) wired = keyframe_wire_(sent);
+    const KeyframeData& keyframe = wired ? *wired : sent;
     if (deterministic_) {
       keyframe_link_.send(keyframe, now_us);
       return;

@@ -424,8 +424,11 @@ class Tracker::Impl {
   // How far from the last pose the camera can be by 'frame' (TrackerOptions::
   // relocalise_max_speed_m_s); infinite when unbounded.
   double relocaliseReachM(const RgbdFrame& frame) const;
-  // How far the velocity at the loss has carried the camera from the last pose [m].
+  // How far the velocity at the loss has carried the camera from the last pose [m], counted
+  // in frames as coasting counts them. No velocity known (lost right after a relocalisation
+  // or before a second pose): infinite, the camera may be anywhere near.
   double lostTravelM() const {
+    if (lost_velocity_.isZero()) return std::numeric_limits<double>::infinity();
     const SE3 coasted = SE3::exp(static_cast<double>(lost_frames_) * lost_velocity_) * T_c_w_;
     return (coasted.inverse().translation() - T_c_w_.inverse().translation()).norm();
   }
@@ -776,7 +779,8 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, coasted.inverse()});
   }
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
-  const bool last_pose_in_reach = lostTravelM() <= options_.relocalise_last_pose_reach_m;
+  const double last_pose_reach_m = options_.relocalise_last_pose_reach_m;
+  const bool last_pose_in_reach = last_pose_reach_m > 0.0 && lostTravelM() <= last_pose_reach_m;
   for (size_t i = 0; i < candidates.size(); ++i) {
     const RelocalisationCandidate& candidate = candidates[i];
     const bool near_last = candidate.keyframe < 0;
