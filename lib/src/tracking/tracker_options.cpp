@@ -106,7 +106,7 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "(0: the last pose only)");
   r->bind(s, "relocalise_last_pose_reach_m", &relocalise_last_pose_reach_m, 0.0, 1000.0, "m",
           "a pose relocalised from the last pose may be dodgy until the velocity at the loss has carried the "
-          "camera this far from it; beyond, or with no velocity known, it must be good (0: always good)");
+          "camera this far from it; beyond, it must be good (0: always good)");
   r->bind(s, "relocalise_max_speed_m_s", &relocalise_max_speed_m_s, 0.0, 1000.0, "m/s",
           "a relocalised pose lies within this speed times the time since the last pose, plus 1 m, "
           "of the last pose; farther lookalike places are refused (0: anywhere)");

@@ -177,8 +177,8 @@ struct TrackerOptions {
   // last pose, beyond the fine stage's reach (see above), tracking from there can only find
   // a lookalike nearby (a corridor 1 m back, after a 0.5 s cover at 2 m/s: quality 0.21,
   // 31 points found, and the map built on from there), so it must be good, as from a
-  // keyframe's view; so must it when no velocity is known at the loss (lost right after a
-  // relocalisation). 0: always good; a large value: dodgy enough while a velocity is known.
+  // keyframe's view. With no velocity known at the loss (lost right after a relocalisation)
+  // the travel counts as 0. 0: always good; a large value: always dodgy enough.
   double relocalise_last_pose_reach_m = 0.3;  // [m]
   // Nor does it fly faster than it can: a relocalised pose must lie within this speed times
   // the time since the last pose (plus 1 m for that pose's own error) of the last pose, and
