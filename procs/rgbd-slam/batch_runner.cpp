@@ -81,10 +81,12 @@ Expected<BatchOptions> BatchOptions::fromCommandLine(const CommandLine& cli) {
   o.localise_only = cli.has("localise-only");
   if (o.localise_only && o.load_map.empty()) return Error{"--localise-only needs --load-map FILE (the map to localise in)"};
   const TrackerProcessOptions& node = o.config.procs->tracker_node;
-  const auto rungs = static_cast<long>(encodingLadder(node.bestEncoding(), node.link_budget.min_jpeg_quality).size());
+  const std::vector<KeyframeEncoding> ladder = encodingLadder(node.bestEncoding(), node.link_budget.min_jpeg_quality);
+  const auto rungs = static_cast<long>(ladder.size());
   auto rung = cli.getInt("keyframe-rung", -1, rungs - 1);
   if (!rung) return Error{rung.error() + " (this configuration's ladder has " + std::to_string(rungs) + " rungs)"};
   o.keyframe_rung = static_cast<int>(*rung);
+  if (o.keyframe_rung >= 0) o.keyframe_encoding = ladder[static_cast<size_t>(o.keyframe_rung)];
   // Found out at the start, not after the whole run.
   const std::filesystem::path save_dir = std::filesystem::path(o.save_map).parent_path();
   if (!o.save_map.empty() && !save_dir.empty() && !std::filesystem::is_directory(save_dir)) {
@@ -152,10 +154,7 @@ BatchRunner::BatchRunner(BatchOptions options, PinholeCamera camera,
   const auto start = std::chrono::steady_clock::now();
   SlamStart slam_start{start_map, options_.localise_only, {}};
   if (options_.keyframe_rung >= 0) {
-    const TrackerProcessOptions& node = options_.config.procs->tracker_node;
-    const KeyframeEncoding encoding = encodingLadder(node.bestEncoding(), node.link_budget.min_jpeg_quality)
-        [static_cast<size_t>(options_.keyframe_rung)];
-    slam_start.keyframe_wire = [this, encoding](const KeyframeData& k) { return throughWire(k, encoding); };
+    slam_start.keyframe_wire = [this](const KeyframeData& k) { return throughWire(k, options_.keyframe_encoding); };
   }
   slam_ = std::make_unique<SlamSystem>(camera_, *options_.config.slam, options_.deterministic, options_.link,
                                        slam_start);

@@ -37,6 +37,7 @@ struct BatchOptions {
   // encoding ladder (0: tracker_node.keyframe_*; higher: coarser, common/link_budget.h);
   // -1: as the tracker made them.
   int keyframe_rung = -1;
+  KeyframeEncoding keyframe_encoding;      // that rung's encoding (keyframe_rung >= 0)
 
   static Expected<BatchOptions> fromCommandLine(const CommandLine& cli);
 };
