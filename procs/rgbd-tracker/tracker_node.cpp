@@ -178,7 +178,12 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   const RgbdFrame& frame = frame_;
   ++counters_.frames;
-  TrackResult result = tracker_.trackPose(frame);
+  // Lost with a newer frame waiting: the newer one is relocalised, this one is passed
+  // (Tracker::passLost): relocalisation takes longer than a frame on a large map, and each
+  // frame queued behind it would wait as long again.
+  const bool pass = tracker_.lost() && !backlog_.empty();
+  counters_.frames_passed += pass;
+  TrackResult result = pass ? tracker_.passLost(frame) : tracker_.trackPose(frame);
   result.pose.utime = frame.utime;
   result.pose.seq = frame.seq;
   const bool keyframe_in_pose = result.new_keyframe.has_value();
@@ -368,6 +373,7 @@ void TrackerNode::publishStatus() {
                      {"keyframe_store_errors", store ? store->errors() : 0},
                      {"frames", c.frames},
                      {"frames_skipped", c.frames_skipped},
+                     {"frames_passed", c.frames_passed},
                      {"poses", c.poses},
                      {"lost_frames", c.lost},
                      {"frames_tracking", state_frames_[static_cast<size_t>(TrackingState::kTracking)]},
@@ -416,7 +422,7 @@ void TrackerNode::publishStatus() {
 void TrackerNode::printSummary() const {
   const Counters& c = counters_;
   // Key-value lines on stdout (for scripts), as rgbd-slam prints its summary.
-  std::printf("frames_skipped %ld\n", c.frames_skipped);
+  std::printf("frames_skipped %ld\nframes_passed %ld\n", c.frames_skipped, c.frames_passed);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
   for (TrackingState state : {TrackingState::kInitialising, TrackingState::kTracking, TrackingState::kDodgy,
                               TrackingState::kLost, TrackingState::kRelocalised}) {

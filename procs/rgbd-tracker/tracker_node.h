@@ -5,7 +5,8 @@
 //   RGBD_FRAME (local bus): frames are tracked in order from a backlog of at most
 //   max_backlog_frames; when a newer frame arrives at a full backlog the oldest is skipped
 //   and counted (a real-time tracker must not fall behind the camera: latency stays bounded
-//   by the backlog, while one slow frame, e.g. a keyframe's, costs no pose). SLAM_POSE for
+//   by the backlog, while one slow frame, e.g. a keyframe's, costs no pose); while lost, a
+//   frame with a newer one waiting is passed unrelocalised (Tracker::passLost). SLAM_POSE for
 //   every tracked frame (its state says tracking / dodgy / lost / relocalised /
 //   initialising), as soon as the pose is known: the frame's keyframe and local map follow
 //   it (Tracker::trackPose, finishFrame; issue 10, item 6).
@@ -148,7 +149,7 @@ class TrackerNode {
   RecentSamples after_pose_ms_, map_apply_ms_;
 
   struct Counters {
-    long frames = 0, frames_skipped = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
+    long frames = 0, frames_skipped = 0, frames_passed = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
          bad_map_messages = 0, keyframes = 0, keyframe_sends = 0, inconsistent = 0, depth_aided = 0,
          maps_received = 0, maps_applied = 0, maps_stale = 0, maps_foreign = 0,
          maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0,

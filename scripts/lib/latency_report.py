@@ -6,6 +6,7 @@ timestamp to its pose's publication, every SLAM_POSE message, whatever its state
     latency_ms_median, latency_ms_p99, latency_ms_max     every frame
     latency_ms_p99_tracking                               frames tracking or dodgy (not lost,
                                                           relocalised or initialising)
+    latency_ms_p99_lost                                   frames lost (relocalising or passed)
 Rows that do not parse (a line cut when the logger was stopped) are skipped.
 The tracker's own summary covers its last 1000 frames only (common/samples.h).
 Standard library only."""
@@ -34,6 +35,7 @@ def main():
     print("latency_ms_p99 %.3f" % quantile(every, 0.99))
     print("latency_ms_max %.3f" % (max(every) if every else float("nan")))
     print("latency_ms_p99_tracking %.3f" % quantile(tracking, 0.99))
+    print("latency_ms_p99_lost %.3f" % quantile([latency for state, latency in rows if state == "lost"], 0.99))
 
 
 if __name__ == "__main__":

@@ -199,6 +199,29 @@ class Tracker::Impl {
     return result;
   }
 
+  TrackResult passLost(const RgbdFrame& frame) {
+    if (!lost()) return trackPose(frame);
+    const auto start = std::chrono::steady_clock::now();
+    TrackResult result;
+    if (std::optional<KeyframeData> late = finishFrame()) result.new_keyframe = std::move(late);
+    result.pose.state = TrackingState::kLost;
+    result.pose.T_w_c = T_c_w_.inverse();
+    result.error = frameError(frame);  // a bad frame is reported as such, passed or not
+    if (result.error.empty()) {
+      ++lost_frames_;
+      result.status = TrackResult::Status::kLost;
+      result.lost_reason = "passed: a newer frame waits";
+      publish(&result, frame.utime);
+    }
+    result.track_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    result.pose.utime = frame.utime;
+    result.pose.seq = frame.seq;
+    return result;
+  }
+
+  bool lost() const { return state_ == TrackingState::kLost && replica_.map().numKeyframes() > 0; }
+
   // In the order track() always did them: the keyframe first, then the local map around
   // the frame's pose (with the new keyframe in it).
   std::optional<KeyframeData> finishFrame() {
@@ -264,6 +287,7 @@ class Tracker::Impl {
 
  private:
   TrackResult trackFrame(const RgbdFrame& frame);
+  std::string frameError(const RgbdFrame& frame) const;  // why the tracker cannot use it; empty: usable
   void prepareFrame(const RgbdFrame& frame);
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
@@ -518,22 +542,23 @@ class Tracker::Impl {
 // ---------------------------------------------------------------------------------------
 // Frame flow
 
+std::string Tracker::Impl::frameError(const RgbdFrame& frame) const {
+  if (frame.colour.empty()) return "frame has no colour image";
+  if (frame.colour.cols != camera_.width || frame.colour.rows != camera_.height ||
+      (frame.colour.type() != CV_8UC3 && frame.colour.type() != CV_8UC1)) {
+    return "frame is " + std::to_string(frame.colour.cols) + "x" + std::to_string(frame.colour.rows) +
+           ", camera '" + camera_.name + "' is " + std::to_string(camera_.width) + "x" +
+           std::to_string(camera_.height) + " (8-bit colour or grey expected)";
+  }
+  return "";
+}
+
 TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   TrackResult result;
   result.pose.state = state_;
   result.pose.T_w_c = T_c_w_.inverse();
-  if (frame.colour.empty()) {
-    result.error = "frame has no colour image";
-    return result;
-  }
-  if (frame.colour.cols != camera_.width || frame.colour.rows != camera_.height ||
-      (frame.colour.type() != CV_8UC3 && frame.colour.type() != CV_8UC1)) {
-    result.error = "frame is " + std::to_string(frame.colour.cols) + "x" +
-                   std::to_string(frame.colour.rows) + ", camera '" + camera_.name + "' is " +
-                   std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +
-                   " (8-bit colour or grey expected)";
-    return result;
-  }
+  result.error = frameError(frame);
+  if (!result.error.empty()) return result;
   prepareFrame(frame);
   frame_inconsistent_ = false;
   TrackResult tracked;
@@ -1579,6 +1604,8 @@ Tracker::~Tracker() = default;
 TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame); }
 TrackResult Tracker::trackPose(const RgbdFrame& frame) { return impl_->trackPose(frame); }
 std::optional<KeyframeData> Tracker::finishFrame() { return impl_->finishFrame(); }
+TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(frame); }
+bool Tracker::lost() const { return impl_->lost(); }
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }

@@ -271,6 +271,14 @@ class Tracker {
   // one call, in the same order, with the same results.
   TrackResult trackPose(const RgbdFrame& frame);
   std::optional<KeyframeData> finishFrame();
+  // While lost, a real-time caller that already holds a newer frame passes this one
+  // instead of tracking it: no relocalisation is tried on it (the newer frame's is; a
+  // relocalisation takes longer than a frame on a large map, and every frame queued behind
+  // it would wait as long again), it is reported lost at once, and it counts as a frame
+  // lost (where the tracker coasts to, TrackerOptions::relocalise_coast_frames). Not lost
+  // (or no map yet): the same as trackPose().
+  TrackResult passLost(const RgbdFrame& frame);
+  bool lost() const;  // relocalising: the next frame would be relocalised, not tracked
 
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool applyMap(const MapUpdate& update);
