@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
+
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdslam/synth/scene.h"
@@ -33,6 +36,13 @@ class LocalMap : public ::testing::Test {
     }
   }
   const Keyframe& keyframe(KeyframeId id) const { return *replica->map().keyframe(id); }
+  // Map version 1 acknowledges the three keyframes (the mapper may cull them now).
+  void acknowledgeAll() {
+    MapUpdate acked;
+    acked.version = 1;
+    acked.acked_below = 3;
+    ASSERT_TRUE(replica->apply(acked));
+  }
 
   PinholeCamera camera;
   std::unique_ptr<MapReplica> replica;
@@ -129,10 +139,7 @@ TEST_F(LocalMap, AStoreHoldsTheColdKeyframesImages) {
   replica->updateLocalMap({0}, 1, 10, 90);
   EXPECT_TRUE(keyframe(2).cold());
   EXPECT_EQ((*store)->bytes(), stored) << "frozen again: the stored JPEG is kept, not made again";
-  MapUpdate acked;
-  acked.version = 1;
-  acked.acked_below = 3;
-  ASSERT_TRUE(replica->apply(acked));
+  acknowledgeAll();
   MapUpdate cull;
   cull.version = 2;
   cull.removed_keyframes = {2};
@@ -189,10 +196,7 @@ TEST_F(LocalMap, ThawingForOneCandidateAfterAnotherKeepsTheHotSetBounded) {
 // The mapper culled keyframe 1 (a delta names it): point 101, which it described, comes
 // re-described by keyframe 2 and keeps a slot; the keyframe and its measurements go.
 TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
-  MapUpdate acked;
-  acked.version = 1;
-  acked.acked_below = 3;
-  ASSERT_TRUE(replica->apply(acked));
+  acknowledgeAll();
   replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{300, Vec3(1, 0, 2), 1, {300, 200}, 0}),
                                            Measurement{300, {300, 200}, 0, 2.0}});  // the mapper never had it
   MapUpdate delta;
@@ -238,6 +242,62 @@ TEST_F(LocalMap, AKeyframeCulledByTheMapperLeavesTheReplica) {
   snapshot.removed_keyframes.clear();
   EXPECT_TRUE(replica->apply(snapshot));
   EXPECT_EQ(replica->map().numKeyframes(), 3u) << "keyframes absent from a snapshot but not culled stay";
+}
+
+// The index of the points each keyframe describes, and their bounds, follow every change
+// the replica makes to the points (checked against a pass over the whole map): points added,
+// re-described from another keyframe, moved far, removed; a keyframe going cold and culled.
+TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
+  const auto check = [&](const char* when) {
+    std::map<KeyframeId, std::vector<PointId>> expected;
+    for (const auto& [id, point] : replica->map().points()) expected[point.source_keyframe].push_back(id);
+    for (const auto& [kf, keyframe] : replica->map().keyframes()) {
+      std::vector<PointId> indexed = replica->describedBy(kf);
+      std::sort(indexed.begin(), indexed.end());
+      std::sort(expected[kf].begin(), expected[kf].end());
+      EXPECT_EQ(indexed, expected[kf]) << when << ", keyframe " << kf;
+      const MapReplica::Bounds bounds = replica->boundsOf(kf);
+      if (!indexed.empty()) {
+        EXPECT_GE(bounds.radius, 0.0) << when << ", keyframe " << kf;
+      }
+      for (PointId pid : indexed) {
+        EXPECT_LE((replica->map().point(pid)->p_w - bounds.centre).norm(), bounds.radius)
+            << when << ", point " << pid << " outside its keyframe's bounds";
+      }
+    }
+  };
+  check("set up");
+  for (PointId id = 0; id < 20; ++id) {
+    replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.2 * id), id % 3,
+                                                                {300, 200}, 0}),
+                                          Measurement{id, {300, 200}, 0, 1.0}});
+  }
+  check("points added");
+  replica->updateLocalMap({0}, 2, 10, 90);
+  EXPECT_TRUE(keyframe(1).cold());
+  check("keyframes 1 and 2 cold");
+  acknowledgeAll();
+  MapUpdate delta;
+  delta.version = 2;
+  delta.points.push_back(MapPointData{4, Vec3(3, 1, 4), 2, Eigen::Vector2d(250, 240), 1});  // re-described by 2
+  delta.moved_points.push_back(PointPosition{5, Vec3(-8, 2, 9)});                           // far from the rest
+  delta.moved_points.push_back(PointPosition{7, Vec3(0.7, -0.4, 2.5)});
+  delta.removed_points = {8, 11};
+  ASSERT_TRUE(replica->apply(delta));
+  check("a delta applied");
+  EXPECT_GT(replica->boundsOf(2).radius, 5.0) << "grown to the far point";
+  replica->updateLocalMap({2}, 2, 10, 90);  // keyframe 2 thawed...
+  EXPECT_FALSE(keyframe(2).cold());
+  replica->updateLocalMap({0}, 2, 10, 90);  // ...and frozen again: its bounds exact
+  EXPECT_TRUE(keyframe(2).cold());
+  check("keyframe 2 frozen again");
+  MapUpdate cull;
+  cull.version = 3;
+  cull.removed_keyframes = {1};
+  ASSERT_TRUE(replica->apply(cull));
+  EXPECT_FALSE(replica->map().hasKeyframe(1));
+  EXPECT_TRUE(replica->describedBy(1).empty());
+  check("keyframe 1 culled");
 }
 
 }  // namespace

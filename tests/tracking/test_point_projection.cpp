@@ -67,5 +67,34 @@ TEST(PointProjection, APointSeenFromTooFarAroundItsSourceViewIsNotSearched) {
   EXPECT_TRUE(searchedFrom(65.0, 0.0));  // 0: no bound
 }
 
+// The cold keyframes' culling (sphereMayBeInView) never hides a point inView would count:
+// random spheres, each filled with points on its surface and inside, from random poses;
+// and it does cull (the control): most spheres behind or beside the camera are skipped.
+TEST(PointProjection, ASphereCulledHasNoPointInView) {
+  cv::RNG rng(7);
+  for (const bool distorted : {false, true}) {
+    PinholeCamera camera = viewAngleCamera();
+    if (distorted) camera.k1 = -0.2;
+    int culled = 0, missed = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+      const Vec3 centre(rng.uniform(-6.0, 6.0), rng.uniform(-6.0, 6.0), rng.uniform(-6.0, 6.0));
+      const double radius = rng.uniform(0.0, 2.0);
+      const SE3 T_c_w(Eigen::AngleAxisd(rng.uniform(-3.0, 3.0), Vec3(rng.uniform(-1.0, 1.0), 1.0, rng.uniform(-1.0, 1.0)).normalized())
+                          .toRotationMatrix(),
+                      Vec3(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)));
+      const bool may = sphereMayBeInView(camera, T_c_w, centre, radius, ProjectionOptions{});
+      culled += may ? 0 : 1;
+      if (may) continue;
+      for (int k = 0; k < 200; ++k) {
+        const Vec3 direction = Vec3(rng.gaussian(1.0), rng.gaussian(1.0), rng.gaussian(1.0)).normalized();
+        const double r = k % 2 ? radius : radius * rng.uniform(0.0, 1.0);  // on the surface, inside
+        missed += inView(camera, T_c_w, centre + r * direction, ProjectionOptions{}) ? 1 : 0;
+      }
+    }
+    EXPECT_EQ(missed, 0) << (distorted ? "distorted" : "pinhole");
+    EXPECT_GT(culled, distorted ? 600 : 1200) << (distorted ? "distorted: behind only" : "pinhole");
+  }
+}
+
 }  // namespace
 }  // namespace rgbdslam

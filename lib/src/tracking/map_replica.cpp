@@ -71,6 +71,7 @@ void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
     std::vector<uint8_t>().swap(keyframe->cold_grey);
   }
   ImagePyramid().levels.swap(keyframe->pyramid.levels);
+  resetBounds(keyframe->id);
   // Its points' slots go too (their search state and patch caches were for the pyramid just
   // freed): thawing makes them anew. The points stay, with their depth records.
   std::vector<PointId> described;
@@ -100,8 +101,9 @@ bool MapReplica::thaw(Keyframe* keyframe) {
 void MapReplica::addSlotsOf(const std::unordered_set<KeyframeId>& keyframes) {
   if (keyframes.empty()) return;
   std::vector<PointId> described;
-  for (const auto& [id, point] : map_.points()) {
-    if (keyframes.count(point.source_keyframe)) described.push_back(id);
+  for (KeyframeId id : keyframes) {
+    const std::vector<PointId>& points = describedBy(id);
+    described.insert(described.end(), points.begin(), points.end());
   }
   std::sort(described.begin(), described.end());
   for (PointId id : described) addSlot(map_.point(id));
@@ -112,14 +114,72 @@ Keyframe* MapReplica::addKeyframe(std::unique_ptr<Keyframe> keyframe) {
   return map_.addKeyframe(std::move(keyframe));
 }
 
-void MapReplica::addProvisionalPoint(const NewPoint& point) { addSlot(map_.addPoint(point.point)); }
+void MapReplica::addProvisionalPoint(const NewPoint& point) { addSlot(putPoint(point.point)); }
 
 Keyframe* MapReplica::addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe) {
   acked_below_ = std::max(acked_below_, keyframe->id + 1);
   return addKeyframe(std::move(keyframe));
 }
 
-void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(map_.addPoint(point)); }
+void MapReplica::addAcknowledgedPoint(const MapPoint& point) { addSlot(putPoint(point)); }
+
+const std::vector<PointId>& MapReplica::describedBy(KeyframeId id) const {
+  static const std::vector<PointId> kNone;
+  const auto it = described_.find(id);
+  return it == described_.end() ? kNone : it->second;
+}
+
+MapReplica::Bounds MapReplica::boundsOf(KeyframeId id) const {
+  const auto it = bounds_.find(id);
+  return it == bounds_.end() ? Bounds{} : it->second;
+}
+
+MapPoint* MapReplica::putPoint(const MapPoint& point) {
+  const MapPoint* before = map_.point(point.id);
+  if (before && before->source_keyframe != point.source_keyframe) {
+    unindex(before->source_keyframe, point.id);
+  }
+  if (!before || before->source_keyframe != point.source_keyframe) described_[point.source_keyframe].push_back(point.id);
+  MapPoint* stored = map_.addPoint(point);
+  growBounds(stored->source_keyframe, stored->p_w);
+  return stored;
+}
+
+void MapReplica::unindex(KeyframeId source, PointId id) {
+  std::vector<PointId>& described = described_[source];
+  const auto it = std::find(described.begin(), described.end(), id);
+  if (it == described.end()) return;
+  *it = described.back();
+  described.pop_back();
+}
+
+// The smallest sphere holding the old one and p_w (a hair larger: the culling that relies
+// on it must never miss a point to rounding).
+void MapReplica::growBounds(KeyframeId id, const Vec3& p_w) {
+  constexpr double kSlackM = 1e-6;
+  Bounds& bounds = bounds_[id];
+  if (bounds.radius < 0.0) {
+    bounds.centre = p_w;
+    bounds.radius = kSlackM;
+    return;
+  }
+  const double d = (p_w - bounds.centre).norm();
+  if (d <= bounds.radius) return;
+  bounds.centre += (0.5 * (d - bounds.radius) / d) * (p_w - bounds.centre);
+  bounds.radius = 0.5 * (d + bounds.radius) + kSlackM;
+}
+
+void MapReplica::resetBounds(KeyframeId id) {
+  bounds_.erase(id);
+  const std::vector<PointId>& points = describedBy(id);
+  if (points.empty()) return;
+  Vec3 centroid = Vec3::Zero();
+  for (PointId pid : points) centroid += map_.point(pid)->p_w;
+  centroid /= static_cast<double>(points.size());
+  double radius = 0.0;
+  for (PointId pid : points) radius = std::max(radius, (map_.point(pid)->p_w - centroid).norm());
+  bounds_[id] = Bounds{centroid, radius + 1e-6};
+}
 
 void MapReplica::clear() {
   if (store_) store_->clear();
@@ -127,6 +187,8 @@ void MapReplica::clear() {
   acked_below_ = 0;
   slots_.clear();
   slot_index_.clear();
+  described_.clear();
+  bounds_.clear();
 }
 
 // Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists. A
@@ -162,6 +224,9 @@ void MapReplica::removeSlot(PointId id) {
 
 void MapReplica::removePoint(PointId id) {
   removeSlot(id);
+  if (const MapPoint* point = map_.point(id)) {
+    unindex(point->source_keyframe, id);
+  }
   map_.removePoint(id);
 }
 
@@ -191,14 +256,18 @@ bool MapReplica::apply(const MapUpdate& update) {
     const MapPoint* before = map_.point(p.id);
     const bool same_patch = before && before->source_keyframe == p.source_keyframe &&
                             before->source_level == p.level && before->source_uv == p.uv;
-    MapPoint* stored = map_.addPoint(point);
+    MapPoint* stored = putPoint(point);
     if (same_patch && slot_index_.count(p.id)) continue;  // slot and patch cache stay valid
     addSlot(stored);
   }
   for (const PointPosition& moved : update.moved_points) {
     MapPoint* point = map_.point(moved.id);
-    if (point) point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
-    else unknown = true;
+    if (point) {
+      point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
+      growBounds(point->source_keyframe, point->p_w);
+    } else {
+      unknown = true;
+    }
   }
   for (PointId id : update.removed_points) removePoint(id);
   for (KeyframeId id : update.removed_keyframes) {
@@ -214,11 +283,15 @@ bool MapReplica::apply(const MapUpdate& update) {
 // any still described by this keyframe (the mapper never had them) go with it.
 void MapReplica::removeKeyframe(KeyframeId id) {
   if (!map_.hasKeyframe(id)) return;
+  // In the map's order, not the index's: removing a slot moves the last one into its place,
+  // so the order decides the slots' (the search's) order after it.
   std::vector<PointId> described;
   for (const auto& [pid, point] : map_.points()) {
     if (point.source_keyframe == id) described.push_back(pid);
   }
   for (PointId pid : described) removePoint(pid);
+  described_.erase(id);
+  bounds_.erase(id);
   map_.removeKeyframe(id);
   if (store_) store_->remove(id);
 }

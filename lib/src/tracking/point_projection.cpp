@@ -50,6 +50,24 @@ bool inView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& p_w, cons
   return uv && camera.inImage(*uv, options.margin_px);
 }
 
+bool sphereMayBeInView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& centre_w, double radius_m,
+                       const ProjectionOptions& options) {
+  const Vec3 c = T_c_w * centre_w;
+  if (c.z() + radius_m < options.min_depth_m) return false;
+  if (camera.hasDistortion() || !(camera.fx > 0.0) || !(camera.fy > 0.0)) return true;
+  // In the image (with any margin >= 0) needs, at z > 0, x / z <= hi = (width - cx) / fx, a
+  // little wider than the last column: the half-space x - hi z <= 0. The sphere lies wholly
+  // outside it when its centre's distance from the plane x - hi z = 0 exceeds the radius.
+  // Likewise x / z >= lo (lo z - x <= 0), and y.
+  const auto outside = [&](double along, double slope, double sign) {
+    return sign * (along - slope * c.z()) > radius_m * std::sqrt(1.0 + slope * slope);
+  };
+  const double x_lo = (-1.0 - camera.cx) / camera.fx, x_hi = (camera.width - camera.cx) / camera.fx;
+  const double y_lo = (-1.0 - camera.cy) / camera.fy, y_hi = (camera.height - camera.cy) / camera.fy;
+  return !(outside(c.x(), x_hi, 1.0) || outside(c.x(), x_lo, -1.0) || outside(c.y(), y_hi, 1.0) ||
+           outside(c.y(), y_lo, -1.0));
+}
+
 bool projectPoint(const PinholeCamera& camera, const SE3& T_c_w,
                   const std::vector<KeyframeView>& views, const ProjectionOptions& options,
                   PointSlot* slot) {

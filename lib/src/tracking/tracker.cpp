@@ -1470,10 +1470,16 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
   }
   // The points of cold keyframes have no slot (map_replica.h); those in view count for
   // their keyframes, so that the local map thaws the keyframes the camera came back to.
-  for (const auto& [id, point] : replica_.map().points()) {
-    const auto kf = static_cast<size_t>(point.source_keyframe);
-    if (kf < views_.size() && views_[kf].cold && inView(camera_, T_c_w, point.p_w, options_.projection)) {
-      ++points_in_view_[kf];
+  // Only keyframes whose points' bounding sphere may be in view are looked at.
+  for (const auto& [id, keyframe] : replica_.map().keyframes()) {
+    const auto kf = static_cast<size_t>(id);
+    if (kf >= views_.size() || !views_[kf].cold) continue;
+    const MapReplica::Bounds bounds = replica_.boundsOf(id);
+    if (bounds.radius < 0.0 || !sphereMayBeInView(camera_, T_c_w, bounds.centre, bounds.radius, options_.projection)) {
+      continue;
+    }
+    for (PointId pid : replica_.describedBy(id)) {
+      if (inView(camera_, T_c_w, replica_.map().point(pid)->p_w, options_.projection)) ++points_in_view_[kf];
     }
   }
 }

@@ -19,7 +19,9 @@
 //   once), the pyramid freed, and their points lose their slots (the points stay, with their
 //   depth records) until the camera comes back and the keyframe is thawed (JPEG decoded,
 //   pyramid rebuilt, slots made anew in point id order). The tracker counts a cold
-//   keyframe's points in view from the points themselves (point_projection.h, inView).
+//   keyframe's points in view from the points themselves (point_projection.h, inView),
+//   found by the replica's index of each keyframe's points (describedBy), and only for the
+//   keyframes whose points' bounding sphere may be in view (boundsOf, sphereMayBeInView).
 // Memory: every keyframe's pose and small blurry image (compact: its image only, 4.8 kB at
 // 640x480; the relocaliser restores the gradients and support it aligns with); every point
 // (about 150 bytes with its hash-map entry; no measurements: Keyframe::releaseMappingData);
@@ -97,7 +99,24 @@ class MapReplica {
   const Map& map() const { return map_; }
   std::vector<PointSlot>& slots() { return slots_; }
 
+  // The points a keyframe describes (is the source of), in no order; kept with every change
+  // to the points, so that a keyframe's points are found without a pass over the whole map
+  // (100 000 points after the 10-minute flight; such passes, once for every pose tried,
+  // were two thirds of its tracking time).
+  const std::vector<PointId>& describedBy(KeyframeId id) const;
+  // A sphere holding every point the keyframe describes: exact when it last went cold,
+  // grown (never shrunk) as its points are added or moved. Radius < 0: it describes none.
+  struct Bounds {
+    Vec3 centre = Vec3::Zero();
+    double radius = -1.0;  // [m]
+  };
+  Bounds boundsOf(KeyframeId id) const;
+
  private:
+  MapPoint* putPoint(const MapPoint& point);  // map_.addPoint, with the index and bounds
+  void unindex(KeyframeId source, PointId id);  // no longer described by 'source'
+  void growBounds(KeyframeId id, const Vec3& p_w);
+  void resetBounds(KeyframeId id);  // exact again, from its points
   void addSlot(MapPoint* point);
   void removeSlot(PointId id);
   void removePoint(PointId id);
@@ -112,6 +131,8 @@ class MapReplica {
   KeyframeId acked_below_ = 0;  // the mapper has acknowledged every keyframe below this id
   std::vector<PointSlot> slots_;
   std::unordered_map<PointId, size_t> slot_index_;
+  std::unordered_map<KeyframeId, std::vector<PointId>> described_;
+  std::unordered_map<KeyframeId, Bounds> bounds_;
 };
 
 }  // namespace rgbdslam

@@ -91,6 +91,12 @@ struct ProjectionOptions {
 // Whether p_w lies in front of the camera at T_c_w and projects into the image (with margin):
 // a point of a cold keyframe (no slot) waiting for the camera to come back.
 bool inView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& p_w, const ProjectionOptions& options);
+// False only when no point of the sphere can be inView: all of it nearer than min_depth_m
+// or, for a camera without distortion, all of it beyond one side of the image's pyramid of
+// view (with a distorted camera only the depth test applies: its projection of points far
+// outside the image is not monotone). Conservative: true does not mean any point is in view.
+bool sphereMayBeInView(const PinholeCamera& camera, const SE3& T_c_w, const Vec3& centre_w, double radius_m,
+                       const ProjectionOptions& options);
 
 // p_c, uv, A_cur_src and search_level of the slot at pose T_c_w. False when the point is
 // behind the camera, outside the image (with margin), its source view is unknown or the
