@@ -182,7 +182,6 @@ void TrackerNode::trackFrame(const Received& received) {
   // (Tracker::passLost): relocalisation takes longer than a frame on a large map, and each
   // frame queued behind it would wait as long again.
   const bool pass = tracker_.lost() && !backlog_.empty();
-  counters_.frames_passed += pass;
   TrackResult result = pass ? tracker_.passLost(frame) : tracker_.trackPose(frame);
   result.pose.utime = frame.utime;
   result.pose.seq = frame.seq;
@@ -194,7 +193,8 @@ void TrackerNode::trackFrame(const Received& received) {
     frame_log_.write(result, false);
     return;
   }
-  track_ms_.add(result.track_ms);
+  if (pass) ++counters_.frames_passed;  // not tracked: not in the tracker's own time either
+  else track_ms_.add(result.track_ms);
   if (result.status == TrackResult::Status::kLost) ++counters_.lost;
   if (hasPose(result.status)) ++counters_.poses;
   if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];

@@ -286,13 +286,20 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   ASSERT_TRUE(replica->apply(delta));
   check("a delta applied");
   EXPECT_GT(replica->boundsOf(2).radius, 5.0) << "grown to the far point";
+  MapUpdate far_gone;
+  far_gone.version = 3;
+  far_gone.removed_points = {5};
+  ASSERT_TRUE(replica->apply(far_gone));
+  check("the far point removed");
+  EXPECT_GT(replica->boundsOf(2).radius, 5.0) << "never shrunk while cold";
   replica->updateLocalMap({2}, 2, 10, 90);  // keyframe 2 thawed...
   EXPECT_FALSE(keyframe(2).cold());
   replica->updateLocalMap({0}, 2, 10, 90);  // ...and frozen again: its bounds exact
   EXPECT_TRUE(keyframe(2).cold());
   check("keyframe 2 frozen again");
+  EXPECT_LT(replica->boundsOf(2).radius, 3.0) << "exact again without the far point";
   MapUpdate cull;
-  cull.version = 3;
+  cull.version = 4;
   cull.removed_keyframes = {1};
   ASSERT_TRUE(replica->apply(cull));
   EXPECT_FALSE(replica->map().hasKeyframe(1));

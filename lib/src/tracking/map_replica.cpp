@@ -95,9 +95,8 @@ bool MapReplica::thaw(Keyframe* keyframe) {
   return true;
 }
 
-// Slots for the points the keyframes describe, in point id order (the search order follows
-// the slots'): one pass over the map's points for every keyframe thawed in a call (a lost
-// tracker thaws 8 around each relocalisation candidate).
+// Slots for the points the keyframes describe (from the index), in point id order (the
+// search order follows the slots').
 void MapReplica::addSlotsOf(const std::unordered_set<KeyframeId>& keyframes) {
   if (keyframes.empty()) return;
   std::vector<PointId> described;
@@ -146,7 +145,9 @@ MapPoint* MapReplica::putPoint(const MapPoint& point) {
 }
 
 void MapReplica::unindex(KeyframeId source, PointId id) {
-  std::vector<PointId>& described = described_[source];
+  const auto entry = described_.find(source);
+  if (entry == described_.end()) return;
+  std::vector<PointId>& described = entry->second;
   const auto it = std::find(described.begin(), described.end(), id);
   if (it == described.end()) return;
   *it = described.back();
@@ -289,8 +290,8 @@ void MapReplica::removeKeyframe(KeyframeId id) {
   for (const auto& [pid, point] : map_.points()) {
     if (point.source_keyframe == id) described.push_back(pid);
   }
+  described_.erase(id);  // first: removePoint need not find each point in it
   for (PointId pid : described) removePoint(pid);
-  described_.erase(id);
   bounds_.erase(id);
   map_.removeKeyframe(id);
   if (store_) store_->remove(id);

@@ -211,8 +211,8 @@ class Tracker::Impl {
       ++lost_frames_;
       result.status = TrackResult::Status::kLost;
       result.lost_reason = "passed: a newer frame waits";
-      publish(&result, frame.utime);
     }
+    publish(&result, frame.utime);  // as trackPose() does, bad frames too
     result.track_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     result.pose.utime = frame.utime;
