@@ -36,6 +36,13 @@ class LocalMap : public ::testing::Test {
     }
   }
   const Keyframe& keyframe(KeyframeId id) const { return *replica->map().keyframe(id); }
+  static MapUpdate removal(int64_t version, std::vector<PointId> points, std::vector<KeyframeId> keyframes) {
+    MapUpdate update;
+    update.version = version;
+    update.removed_points = std::move(points);
+    update.removed_keyframes = std::move(keyframes);
+    return update;
+  }
   // Map version 1 acknowledges the three keyframes (the mapper may cull them now).
   void acknowledgeAll() {
     MapUpdate acked;
@@ -286,10 +293,7 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   ASSERT_TRUE(replica->apply(delta));
   check("a delta applied");
   EXPECT_GT(replica->boundsOf(2).radius, 5.0) << "grown to the far point";
-  MapUpdate far_gone;
-  far_gone.version = 3;
-  far_gone.removed_points = {5};
-  ASSERT_TRUE(replica->apply(far_gone));
+  ASSERT_TRUE(replica->apply(removal(3, {5}, {})));
   check("the far point removed");
   EXPECT_GT(replica->boundsOf(2).radius, 5.0) << "never shrunk while cold";
   replica->updateLocalMap({2}, 2, 10, 90);  // keyframe 2 thawed...
@@ -298,10 +302,7 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   EXPECT_TRUE(keyframe(2).cold());
   check("keyframe 2 frozen again");
   EXPECT_LT(replica->boundsOf(2).radius, 3.0) << "exact again without the far point";
-  MapUpdate cull;
-  cull.version = 4;
-  cull.removed_keyframes = {1};
-  ASSERT_TRUE(replica->apply(cull));
+  ASSERT_TRUE(replica->apply(removal(4, {}, {1})));
   EXPECT_FALSE(replica->map().hasKeyframe(1));
   EXPECT_TRUE(replica->describedBy(1).empty());
   check("keyframe 1 culled");

@@ -6,6 +6,11 @@
 #include "rgbdslam/image/pyramid.h"
 
 namespace rgbdslam {
+namespace {
+// Added to every keyframe's bounding radius: the culling that relies on it must never miss a
+// point to rounding.
+constexpr double kBoundsSlackM = 1e-6;
+}  // namespace
 
 void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "local_map_keyframes", &keyframes, 0, 1000000, "keyframes",
@@ -135,10 +140,10 @@ MapReplica::Bounds MapReplica::boundsOf(KeyframeId id) const {
 
 MapPoint* MapReplica::putPoint(const MapPoint& point) {
   const MapPoint* before = map_.point(point.id);
-  if (before && before->source_keyframe != point.source_keyframe) {
-    unindex(before->source_keyframe, point.id);
+  if (!before || before->source_keyframe != point.source_keyframe) {
+    if (before) unindex(before->source_keyframe, point.id);
+    described_[point.source_keyframe].push_back(point.id);
   }
-  if (!before || before->source_keyframe != point.source_keyframe) described_[point.source_keyframe].push_back(point.id);
   MapPoint* stored = map_.addPoint(point);
   growBounds(stored->source_keyframe, stored->p_w);
   return stored;
@@ -154,20 +159,18 @@ void MapReplica::unindex(KeyframeId source, PointId id) {
   described.pop_back();
 }
 
-// The smallest sphere holding the old one and p_w (a hair larger: the culling that relies
-// on it must never miss a point to rounding).
+// The smallest sphere holding the old one and p_w.
 void MapReplica::growBounds(KeyframeId id, const Vec3& p_w) {
-  constexpr double kSlackM = 1e-6;
   Bounds& bounds = bounds_[id];
   if (bounds.radius < 0.0) {
     bounds.centre = p_w;
-    bounds.radius = kSlackM;
+    bounds.radius = kBoundsSlackM;
     return;
   }
   const double d = (p_w - bounds.centre).norm();
   if (d <= bounds.radius) return;
   bounds.centre += (0.5 * (d - bounds.radius) / d) * (p_w - bounds.centre);
-  bounds.radius = 0.5 * (d + bounds.radius) + kSlackM;
+  bounds.radius = 0.5 * (d + bounds.radius) + kBoundsSlackM;
 }
 
 void MapReplica::resetBounds(KeyframeId id) {
@@ -179,7 +182,7 @@ void MapReplica::resetBounds(KeyframeId id) {
   centroid /= static_cast<double>(points.size());
   double radius = 0.0;
   for (PointId pid : points) radius = std::max(radius, (map_.point(pid)->p_w - centroid).norm());
-  bounds_[id] = Bounds{centroid, radius + 1e-6};
+  bounds_[id] = Bounds{centroid, radius + kBoundsSlackM};
 }
 
 void MapReplica::clear() {

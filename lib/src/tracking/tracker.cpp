@@ -192,10 +192,7 @@ class Tracker::Impl {
     if (late) result.new_keyframe = std::move(late);  // trackFrame makes one only when it initialises
     publish(&result, frame.utime);
     result.keyframe_due = pending_keyframe_.has_value();
-    result.track_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    result.pose.utime = frame.utime;
-    result.pose.seq = frame.seq;
+    stamp(&result, frame, start);
     return result;
   }
 
@@ -213,10 +210,7 @@ class Tracker::Impl {
       result.lost_reason = "passed: a newer frame waits";
     }
     publish(&result, frame.utime);  // as trackPose() does, bad frames too
-    result.track_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    result.pose.utime = frame.utime;
-    result.pose.seq = frame.seq;
+    stamp(&result, frame, start);
     return result;
   }
 
@@ -287,6 +281,13 @@ class Tracker::Impl {
 
  private:
   TrackResult trackFrame(const RgbdFrame& frame);
+  // The frame's time and sequence number, and the time spent on it since 'start'.
+  static void stamp(TrackResult* result, const RgbdFrame& frame, std::chrono::steady_clock::time_point start) {
+    result->track_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    result->pose.utime = frame.utime;
+    result->pose.seq = frame.seq;
+  }
   std::string frameError(const RgbdFrame& frame) const;  // why the tracker cannot use it; empty: usable
   void prepareFrame(const RgbdFrame& frame);
   TrackResult initialise(const RgbdFrame& frame);
