@@ -78,12 +78,15 @@ void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
   ImagePyramid().levels.swap(keyframe->pyramid.levels);
   resetBounds(keyframe->id);
   // Its points' slots go too (their search state and patch caches were for the pyramid just
-  // freed): thawing makes them anew. The points stay, with their depth records.
-  std::vector<PointId> described;
-  for (const PointSlot& slot : slots_) {
-    if (slot.source == keyframe) described.push_back(slot.point->id);
+  // freed): thawing makes them anew. The points stay, with their depth records. Found from
+  // the index, removed in slot order: a removal moves the last slot into the gap, so the
+  // order of removal decides the slots' order, and with it the search order.
+  std::vector<std::pair<size_t, PointId>> described;
+  for (PointId id : describedBy(keyframe->id)) {
+    if (const auto it = slot_index_.find(id); it != slot_index_.end()) described.emplace_back(it->second, id);
   }
-  for (PointId id : described) removeSlot(id);
+  std::sort(described.begin(), described.end());
+  for (const auto& [index, id] : described) removeSlot(id);
 }
 
 bool MapReplica::thaw(Keyframe* keyframe) {
