@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -122,6 +123,89 @@ TEST(SmallBlurryImage, AlignmentOfIdenticalImagesIsIdentity) {
   EXPECT_NEAR(estimate.tx, 0.0, 1e-6);
   EXPECT_NEAR(estimate.ty, 0.0, 1e-6);
   EXPECT_NEAR(error, 0.0, 1e-6);
+}
+
+// The relocaliser's coarse stage: halved SBIs (a compact one as a complete one) align to
+// the same warp as the full ones, within a fraction of a full-resolution pixel.
+TEST(SmallBlurryImage, HalvedSbisAlignToTheFullResolutionsWarp) {
+  const cv::Mat scene = sceneTexture(4);
+  SmallBlurryImage from = sbiOf(view(scene, Se2{}));
+  const SmallBlurryImage complete_half = halveSmallBlurryImage(from);
+  compactSmallBlurryImage(&from);
+  const SmallBlurryImage half_from = halveSmallBlurryImage(from);
+  ASSERT_EQ(half_from.image.size(), cv::Size(20, 15));
+  ASSERT_TRUE(half_from.complete());
+  EXPECT_DOUBLE_EQ(half_from.scale, 1.0 / 32.0);
+  EXPECT_EQ(cv::norm(half_from.support, complete_half.support, cv::NORM_INF), 0.0);
+  for (const Se2& truth : {Se2{4.0 * kDegree, 1.5, -1.0}, Se2{-3.0 * kDegree, -1.0, 2.0},
+                           Se2{8.0 * kDegree, 2.0, 2.0}}) {
+    const SmallBlurryImage to = sbiOf(view(scene, truth));
+    const Se2 estimate =
+        fullResolutionSe2(alignSmallBlurryImages(half_from, halveSmallBlurryImage(to)), to.image.size());
+    EXPECT_NEAR(estimate.theta, truth.theta, 1.0 * kDegree);
+    EXPECT_NEAR(estimate.tx, truth.tx, 0.5);
+    EXPECT_NEAR(estimate.ty, truth.ty, 0.5);
+  }
+}
+
+// Halving averages 2 x 2 blocks from the top left, an odd last row and column left out: on
+// ramps, half pixel x_h holds the value of full pixel 2 x_h + 0.5.
+TEST(SmallBlurryImage, HalvingAveragesTwoByTwoBlocks) {
+  for (const bool along_x : {true, false}) {
+    SmallBlurryImage ramp;
+    ramp.image.create(31, 41, CV_32FC1);
+    for (int y = 0; y < 31; ++y) {
+      for (int x = 0; x < 41; ++x) ramp.image.at<float>(y, x) = static_cast<float>(along_x ? x : y);
+    }
+    const SmallBlurryImage half = halveSmallBlurryImage(ramp);  // compact: its support made
+    ASSERT_EQ(half.image.size(), cv::Size(20, 15));
+    ASSERT_TRUE(half.complete());
+    for (const auto& [x_h, y_h] : {std::pair{0, 0}, {19, 14}, {7, 11}}) {
+      EXPECT_FLOAT_EQ(half.image.at<float>(y_h, x_h), static_cast<float>(2 * (along_x ? x_h : y_h)) + 0.5f);
+    }
+    EXPECT_FLOAT_EQ(half.grad_x.at<float>(7, 10), along_x ? 2.0f : 0.0f);  // 2 full px per half px
+  }
+  SmallBlurryImage tiny;
+  tiny.image = cv::Mat::zeros(1, 40, CV_32FC1);
+  EXPECT_TRUE(halveSmallBlurryImage(tiny).image.empty());
+}
+
+// Started at the warp found coarsely, the alignment needs one step to reach what ten
+// iterations from the identity reach; one step from the identity does not.
+TEST(SmallBlurryImage, AlignmentStartedNearTheWarpConvergesAtOnce) {
+  const cv::Mat scene = sceneTexture(5);
+  const SmallBlurryImage from = sbiOf(view(scene, Se2{}));
+  const SmallBlurryImage to = sbiOf(view(scene, Se2{8.0 * kDegree, 2.0, -1.5}));
+  const Se2 full = alignSmallBlurryImages(from, to);
+  const Se2 near = alignSmallBlurryImages(from, to, 1, nullptr, Se2{7.5 * kDegree, 1.8, -1.3});
+  const Se2 far = alignSmallBlurryImages(from, to, 1);
+  EXPECT_NEAR(near.theta, full.theta, 0.05 * kDegree);
+  EXPECT_NEAR(near.tx, full.tx, 0.02);
+  EXPECT_NEAR(near.ty, full.ty, 0.02);
+  EXPECT_GT(std::abs(far.theta - full.theta) + std::abs(far.tx - full.tx), 0.05 * kDegree + 0.02)
+      << "one step from the identity should not be enough";
+}
+
+// A warp between halved SBIs moves a half pixel x_h where its full-resolution warp moves the
+// full pixel 2 x_h + 0.5, for even and odd sizes.
+TEST(SmallBlurryImage, AHalfResolutionWarpScalesToTheFullImage) {
+  const Se2 half{0.3, 1.25, -0.75};
+  const auto warp = [](const Se2& se2, cv::Size size, const Eigen::Vector2d& x) {
+    const Eigen::Vector2d c(0.5 * (size.width - 1), 0.5 * (size.height - 1));
+    Eigen::Matrix2d R;
+    R << std::cos(se2.theta), -std::sin(se2.theta), std::sin(se2.theta), std::cos(se2.theta);
+    return (R * (x - c) + c + Eigen::Vector2d(se2.tx, se2.ty)).eval();
+  };
+  for (const cv::Size full : {cv::Size(40, 30), cv::Size(41, 31), cv::Size(20, 15)}) {
+    const cv::Size size_h(full.width / 2, full.height / 2);
+    const Se2 scaled = fullResolutionSe2(half, full);
+    EXPECT_EQ(scaled.theta, half.theta);
+    for (const Eigen::Vector2d& x_h : {Eigen::Vector2d(0, 0), Eigen::Vector2d(7, 3), Eigen::Vector2d(12.5, 9)}) {
+      const Eigen::Vector2d expected = (2.0 * warp(half, size_h, x_h).array() + 0.5).matrix();
+      const Eigen::Vector2d got = warp(scaled, full, (2.0 * x_h.array() + 0.5).matrix());
+      EXPECT_LT((got - expected).norm(), 1e-9) << full.width << "x" << full.height;
+    }
+  }
 }
 
 // Rotation angle of a rotation matrix [rad].

@@ -308,5 +308,42 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   check("keyframe 1 culled");
 }
 
+// Freezing a keyframe removes its points' slots in slot order, as a scan of the slots would,
+// even where the index lists them in another order (a point re-described by the keyframe
+// comes last in its list): a removal moves the last slot into the gap, so the order of
+// removal decides the slots' order, and with it the tracker's search order.
+TEST_F(LocalMap, FreezingKeepsTheSlotsOrderOfAScan) {
+  for (PointId id = 0; id < 20; ++id) {
+    replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.2 * id), id % 3,
+                                                                {300, 200}, 0}),
+                                          Measurement{id, {300, 200}, 0, 1.0}});
+  }
+  acknowledgeAll();
+  MapUpdate delta;
+  delta.version = 2;
+  delta.points.push_back(MapPointData{4, Vec3(0.4, -0.5, 1.8), 0, Eigen::Vector2d(250, 240), 0});  // 1 -> 0
+  ASSERT_TRUE(replica->apply(delta));
+  ASSERT_EQ(replica->describedBy(0).back(), 4) << "the re-described point is last in the index";
+  // The order a scan gives: keyframe 0's slots found in slot order, each removal moving the
+  // last slot into its place.
+  std::vector<PointId> expected;
+  for (const PointSlot& slot : replica->slots()) expected.push_back(slot.point->id);
+  std::vector<PointId> described;
+  for (const PointSlot& slot : replica->slots()) {
+    if (slot.point->source_keyframe == 0) described.push_back(slot.point->id);
+  }
+  ASSERT_EQ(described.size(), 9u);  // 100, and 0, 3, 4, 6, 9, ..., 18
+  for (PointId id : described) {
+    const auto it = std::find(expected.begin(), expected.end(), id);
+    *it = expected.back();
+    expected.pop_back();
+  }
+  replica->updateLocalMap({1, 2}, 2, 10, 90);
+  ASSERT_TRUE(keyframe(0).cold());
+  std::vector<PointId> remaining;
+  for (const PointSlot& slot : replica->slots()) remaining.push_back(slot.point->id);
+  EXPECT_EQ(remaining, expected);
+}
+
 }  // namespace
 }  // namespace rgbdslam

@@ -197,6 +197,31 @@ SmallBlurryImage makeSmallBlurryImage(const ImagePyramid& pyramid) {
   return sbi;
 }
 
+SmallBlurryImage halveSmallBlurryImage(const SmallBlurryImage& sbi) {
+  SmallBlurryImage half;
+  half.scale = 0.5 * sbi.scale;
+  const cv::Size size(sbi.image.cols / 2, sbi.image.rows / 2);
+  if (size.area() == 0) return half;
+  cv::Mat support = sbi.support;  // a compact SBI's follows from its size
+  if (support.empty()) blurSupport(blurKernel(), sbi.image.size(), &support);
+  const cv::Rect even(0, 0, 2 * size.width, 2 * size.height);
+  // INTER_AREA at a factor of exactly 2 is the mean of each 2 x 2 block.
+  cv::resize(sbi.image(even), half.image, size, 0, 0, cv::INTER_AREA);
+  cv::resize(support(even), half.support, size, 0, 0, cv::INTER_AREA);
+  gradients(&half);
+  return half;
+}
+
+Se2 fullResolutionSe2(const Se2& half, cv::Size full) {
+  // W_h(x_h) = R (x_h - c_h) + c_h + t_h and x = 2 x_h + 0.5 give W(x) = R (x - c) + c + t with
+  // t = 2 (t_h - (d - R d)), d = (c - 0.5) / 2 - c_h: zero for even sizes.
+  const Eigen::Vector2d c(0.5 * (full.width - 1), 0.5 * (full.height - 1));
+  const Eigen::Vector2d c_h(0.5 * (full.width / 2 - 1), 0.5 * (full.height / 2 - 1));
+  const Eigen::Vector2d d = 0.5 * (c.array() - 0.5).matrix() - c_h;
+  const Eigen::Vector2d t = 2.0 * (Eigen::Vector2d(half.tx, half.ty) - (d - rotation2d(half.theta) * d));
+  return Se2{half.theta, t.x(), t.y()};
+}
+
 double zmssd(const SmallBlurryImage& a, const SmallBlurryImage& b) {
   assert(a.image.size() == b.image.size());
   const double mean_difference = cv::mean(a.image)[0] - cv::mean(b.image)[0];
@@ -213,9 +238,9 @@ double zmssd(const SmallBlurryImage& a, const SmallBlurryImage& b) {
 }
 
 Se2 alignSmallBlurryImages(const SmallBlurryImage& from, const SmallBlurryImage& to,
-                           int iterations, double* final_error) {
+                           int iterations, double* final_error, const Se2& start) {
   assert(from.image.size() == to.image.size());
-  Se2 warp;
+  Se2 warp = start;
   double bias = 0;
   for (int iteration = 0; iteration < iterations; ++iteration) {
     const EsmSystem system = accumulateEsm(from, to, warp, bias);
@@ -233,7 +258,7 @@ Se2 alignSmallBlurryImages(const SmallBlurryImage& from, const SmallBlurryImage&
   }
   if (final_error) {
     const EsmSystem system = accumulateEsm(from, to, warp, bias);
-    *final_error = system.weight_sum > 0 ? system.weighted_sq / system.weight_sum : INFINITY;
+    *final_error = system.weight_sum >= kMinWeightSum ? system.weighted_sq / system.weight_sum : INFINITY;
   }
   return warp;
 }

@@ -1,6 +1,7 @@
 #include "rgbdslam/tracking/map_replica.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "rgbdslam/image/codec.h"
 #include "rgbdslam/image/pyramid.h"

@@ -4,35 +4,66 @@
 
 namespace rgbdslam {
 
+namespace {
+
+// Above this many keyframes per candidate wanted, the ranking is coarse to fine: all are
+// aligned at half the SBI's resolution, and only this many per candidate at full
+// resolution, from the coarse warp. (The margin: the halved SBIs' ranking may swap close
+// neighbours; the full resolution's error decides among them.)
+constexpr size_t kRefinedPerCandidate = 2;
+
+struct Ranked {
+  KeyframeId id = -1;
+  const Keyframe* keyframe = nullptr;
+  double error = 0.0;  // the coarse stage's [grey^2]
+  Se2 start;           // where the full-resolution alignment starts
+};
+
+}  // namespace
+
 std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
                                                               const SmallBlurryImage& sbi,
                                                               const PinholeCamera& camera,
                                                               int n,
                                                               const std::vector<KeyframeId>* among) {
+  std::vector<Ranked> ranked;
+  const auto consider = [&](KeyframeId id, const Keyframe* keyframe) {
+    if (keyframe && keyframe->sbi.image.size() == sbi.image.size()) ranked.push_back({id, keyframe, 0.0, Se2{}});
+  };
+  if (among) {
+    for (KeyframeId id : *among) consider(id, map.keyframe(id));
+  } else {
+    for (const auto& [id, keyframe] : map.keyframes()) consider(id, keyframe.get());
+  }
+  const size_t keep = std::min(ranked.size(), static_cast<size_t>(std::max(n, 0)));
+  if (keep == 0) return {};
+  const size_t refined = kRefinedPerCandidate * keep;
+  if (ranked.size() > refined) {
+    const SmallBlurryImage sbi_half = halveSmallBlurryImage(sbi);
+    for (Ranked& r : ranked) {
+      const Se2 se2 = alignSmallBlurryImages(halveSmallBlurryImage(r.keyframe->sbi), sbi_half, kSbiAlignIterations,
+                                             &r.error);
+      r.start = fullResolutionSe2(se2, sbi.image.size());
+    }
+    std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(refined), ranked.end(),
+                      [](const Ranked& a, const Ranked& b) { return a.error < b.error; });
+    ranked.resize(refined);
+  }
   std::vector<RelocalisationCandidate> candidates;
-  const auto consider = [&](KeyframeId id, const Keyframe& keyframe) {
-    if (keyframe.sbi.image.size() != sbi.image.size()) return;
+  for (const Ranked& r : ranked) {
     SmallBlurryImage restored;  // the replica keeps its keyframes' SBIs compact (map_replica.h)
-    if (!keyframe.sbi.complete()) {
-      restored.image = keyframe.sbi.image;  // shared, not copied
-      restored.scale = keyframe.sbi.scale;
+    if (!r.keyframe->sbi.complete()) {
+      restored.image = r.keyframe->sbi.image;  // shared, not copied
+      restored.scale = r.keyframe->sbi.scale;
       restoreSmallBlurryImage(&restored);
     }
-    const SmallBlurryImage& from = keyframe.sbi.complete() ? keyframe.sbi : restored;
+    const SmallBlurryImage& from = r.keyframe->sbi.complete() ? r.keyframe->sbi : restored;
     // Rank by the error left after the SE(2) alignment: the plain ZMSSD of two views a few
     // degrees apart is dominated by the shift and ranks unrelated views alike.
     double error = 0.0;
-    const Se2 se2 = alignSmallBlurryImages(from, sbi, kSbiAlignIterations, &error);
-    candidates.push_back({id, error, keyframe.T_w_c * rotationFromSe2(se2, camera, sbi.scale)});
-  };
-  if (among) {
-    for (KeyframeId id : *among) {
-      if (const Keyframe* keyframe = map.keyframe(id)) consider(id, *keyframe);
-    }
-  } else {
-    for (const auto& [id, keyframe] : map.keyframes()) consider(id, *keyframe);
+    const Se2 se2 = alignSmallBlurryImages(from, sbi, kSbiAlignIterations, &error, r.start);
+    candidates.push_back({r.id, error, r.keyframe->T_w_c * rotationFromSe2(se2, camera, sbi.scale)});
   }
-  const size_t keep = std::min(candidates.size(), static_cast<size_t>(std::max(n, 0)));
   std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(keep),
                     candidates.end(), [](const RelocalisationCandidate& a,
                                          const RelocalisationCandidate& b) {

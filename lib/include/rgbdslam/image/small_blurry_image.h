@@ -7,7 +7,9 @@
 //
 // Call order: makeSmallBlurryImage(pyramid) once per frame (and keep it for keyframes) ->
 // zmssd(a, b) to rank keyframes, or alignSmallBlurryImages(previous, current) ->
-// rotationFromSe2(se2, camera, sbi.scale) -> the rotation prior for the tracker.
+// rotationFromSe2(se2, camera, sbi.scale) -> the rotation prior for the tracker. A coarse
+// alignment first: halveSmallBlurryImage of both -> alignSmallBlurryImages ->
+// fullResolutionSe2 -> the start of the full-resolution alignment.
 //
 // Frames and units: SBI pixel coordinates [SBI px] with (0, 0) at the centre of the
 // top-left pixel, x right, y down; an SBI pixel covers 16 x 16 level-0 pixels, so
@@ -67,15 +69,29 @@ struct Se2 {
   double ty = 0.0;     // [SBI px]
 };
 
+// The SBI at half its resolution (each pixel the mean of 2 x 2; an odd last row or column
+// is left out, so the mean may be a little off zero: the alignment's bias takes it), with
+// its gradients and support (complete), scale halved; empty when a side is under 2 px.
+// 'sbi' may be compact. Why: the relocaliser ranks a lost frame's shortlist on these first
+// (relocaliser.h): a quarter of the pixels, and the SBI's blur (sigma kSbiBlurSigma
+// [SBI px]) leaves little detail that halving loses.
+SmallBlurryImage halveSmallBlurryImage(const SmallBlurryImage& sbi);
+
+// The Se2 'half' found between two halved SBIs (halveSmallBlurryImage) as a warp between the
+// SBIs of size 'full' they were halved from. Half pixel x_h is full pixel 2 x_h + 0.5.
+Se2 fullResolutionSe2(const Se2& half, cv::Size full);
+
 // ESM (efficient second-order minimisation) Gauss-Newton on (theta, tx, ty) and a
 // brightness bias b, minimising sum_x w(x) (to(W(x)) - from(x) - b)^2 over the pixels x of
 // 'from' whose warp W(x) (the Se2 above) falls inside 'to'; w down-weights pixels within a
-// few pixels of either image's edge (see SmallBlurryImage::support). Starts from the
-// identity; stops after 'iterations' or when the update is negligible. The result maps scene
-// points from their pixel in 'from' to their pixel in 'to'. final_error (optional) receives
-// the weighted mean squared residual [grey levels^2].
+// few pixels of either image's edge (see SmallBlurryImage::support). Starts from 'start'
+// (the identity by default) with no bias; stops after 'iterations' or when the update is
+// negligible. The result maps scene points from their pixel in 'from' to their pixel in
+// 'to'. final_error (optional) receives the weighted mean squared residual [grey levels^2];
+// infinite when the overlap left is too small to fit (a warp that wandered off).
 Se2 alignSmallBlurryImages(const SmallBlurryImage& from, const SmallBlurryImage& to,
-                           int iterations = kSbiAlignIterations, double* final_error = nullptr);
+                           int iterations = kSbiAlignIterations, double* final_error = nullptr,
+                           const Se2& start = Se2{});
 
 // The camera rotation that moves image points like se2 does. 'from' is the old camera and
 // 'to' the new one; the returned SE3 is T_old_new (zero translation), so the new camera's

@@ -156,9 +156,10 @@ struct TrackerOptions {
   DepthPointOptions depth_points;       // provisional points of new keyframes
   int init_min_points = 20;        // keyframe 0 needs this many points from depth, and they
                                    // must fix its pose (quality.max_pose_sigma_*)
-  int relocalise_candidates = 2;   // best keyframes (by small-blurry-image ZMSSD) tried
-  // A lost frame's small blurry image is aligned to every keyframe's (0.23 ms each), which
-  // outgrows a frame's 33 ms at ~140 keyframes. Above this many keyframes (depth modes with
+  int relocalise_candidates = 2;   // best keyframes (by small-blurry-image error after alignment) tried
+  // A lost frame's small blurry image is aligned to every keyframe's (0.23 ms each at full
+  // resolution; coarse to fine, relocaliser.h, about a quarter of that), which outgrows a
+  // frame's 33 ms on a long flight's map. Above this many keyframes (depth modes with
   // reloc_features) it is aligned only to a shortlist of this many: the keyframes nearest
   // the last pose (half) and the best by bag of words over all keyframes (the rest; the
   // lost frame's ORB features, binary_vocabulary.h), and the feature relocaliser's

@@ -1,0 +1,101 @@
+#include "rgbdslam/tracking/relocaliser.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+#include <opencv2/imgproc.hpp>
+
+#include "rgbdslam/synth/scene.h"
+
+namespace rgbdslam {
+namespace {
+
+const SyntheticScene& rankingRoom() {
+  static const SyntheticScene scene(*parseSyntheticSpec("room,frames=400"));
+  return scene;
+}
+
+SmallBlurryImage sbiOfFrame(size_t i) {
+  cv::Mat grey;
+  cv::cvtColor(rankingRoom().render(i).colour, grey, cv::COLOR_BGR2GRAY);
+  return makeSmallBlurryImage(buildPyramid(grey));
+}
+
+// Keyframes every 20 frames of the room's turn, their SBIs compact as the replica keeps them.
+const Map& roomKeyframes() {
+  static const Map map = [] {
+  Map map;
+  for (size_t i = 0; i < 400; i += 20) {
+    auto keyframe = std::make_unique<Keyframe>();
+    keyframe->id = static_cast<KeyframeId>(i / 20);
+    keyframe->T_w_c = rankingRoom().groundTruthPose(i);
+    keyframe->sbi = sbiOfFrame(i);
+    compactSmallBlurryImage(&keyframe->sbi);
+    map.addKeyframe(std::move(keyframe));
+  }
+  return map;
+  }();
+  return map;
+}
+
+double degreesBetween(const SE3& a, const SE3& b) {
+  return logSO3(a.rotationMatrix().transpose() * b.rotationMatrix()).norm() * 180.0 / M_PI;
+}
+
+// Ranked coarse to fine (20 keyframes, 2 wanted: 4 refined at full resolution), the best
+// candidates are those of the full-resolution ranking (n = 20 refines all), with the same
+// poses; a view between keyframes 5 and 6 (frames 100 and 120) finds one of them, its
+// candidate pose turned towards the view's.
+TEST(Relocaliser, RanksCoarseToFineAsAtFullResolution) {
+  const Map& map = roomKeyframes();
+  const SmallBlurryImage query = sbiOfFrame(108);
+  const std::vector<RelocalisationCandidate> coarse = relocalisationCandidates(map, query, rankingRoom().camera(), 2);
+  const std::vector<RelocalisationCandidate> full = relocalisationCandidates(map, query, rankingRoom().camera(), 20);
+  ASSERT_EQ(coarse.size(), 2u);
+  ASSERT_EQ(full.size(), 20u);
+  for (size_t k = 0; k < coarse.size(); ++k) {
+    EXPECT_EQ(coarse[k].keyframe, full[k].keyframe) << k;
+    EXPECT_NEAR(coarse[k].score, full[k].score, 1e-3 * full[k].score) << k;
+    EXPECT_LT(degreesBetween(coarse[k].T_w_c, full[k].T_w_c), 0.05) << k;
+  }
+  EXPECT_TRUE(coarse[0].keyframe == 5 || coarse[0].keyframe == 6) << coarse[0].keyframe;
+  const SE3 truth = rankingRoom().groundTruthPose(108);
+  const SE3 keyframe_pose = map.keyframe(coarse[0].keyframe)->T_w_c;
+  EXPECT_LT(degreesBetween(coarse[0].T_w_c, truth), 0.5 * degreesBetween(keyframe_pose, truth));
+}
+
+// Where no more than two keyframes per candidate are ranked, each is aligned from the
+// identity at full resolution, as before the coarse stage: the scores are exactly those.
+TEST(Relocaliser, RanksFewKeyframesAtFullResolutionOnly) {
+  const Map& map = roomKeyframes();
+  const SmallBlurryImage query = sbiOfFrame(108);
+  const std::vector<KeyframeId> among = {3, 4, 5, 6, 7, 8};  // 6 ranked, 3 wanted: 6 refined
+  const std::vector<RelocalisationCandidate> ranked =
+      relocalisationCandidates(map, query, rankingRoom().camera(), 3, &among);
+  ASSERT_EQ(ranked.size(), 3u);
+  for (const RelocalisationCandidate& candidate : ranked) {
+    SmallBlurryImage sbi = map.keyframe(candidate.keyframe)->sbi;
+    restoreSmallBlurryImage(&sbi);
+    double error = -1.0;
+    alignSmallBlurryImages(sbi, query, kSbiAlignIterations, &error);
+    EXPECT_EQ(candidate.score, error) << candidate.keyframe;
+  }
+}
+
+// Only the keyframes named are ranked; ids not in the map are skipped.
+TEST(Relocaliser, RanksOnlyTheShortlist) {
+  const Map& map = roomKeyframes();
+  const std::vector<KeyframeId> among = {0, 1, 2, 3, 4, 7, 8, 9, 10, 11, 99};
+  const std::vector<RelocalisationCandidate> ranked =
+      relocalisationCandidates(map, sbiOfFrame(108), rankingRoom().camera(), 2, &among);
+  ASSERT_EQ(ranked.size(), 2u);
+  for (const RelocalisationCandidate& candidate : ranked) {
+    EXPECT_NE(std::find(among.begin(), among.end() - 1, candidate.keyframe), among.end() - 1);
+  }
+}
+
+}  // namespace
+}  // namespace rgbdslam
