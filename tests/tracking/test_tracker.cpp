@@ -231,7 +231,11 @@ TEST(Tracker, RecoversFromAJump) {
 // (true depth) is posed again. Without the check the same frame is reported as tracked.
 TEST(Tracker, APoseTheDepthImageContradictsIsLostWithTheReason) {
   RgbdFrame far = roomFrame(151);
-  far.depth = roomFrame(151).depth * 1.4;  // a new buffer: frames are shared
+  // A new buffer: frames are shared, and assigning the product to far.depth would write it
+  // into the shared frame's own buffer (cv::Mat::operator=(MatExpr) reuses a buffer of the
+  // same size and type), corrupting frame 151 for the tests that follow in this process.
+  const cv::Mat deeper = roomFrame(151).depth * 1.4;
+  far.depth = deeper;
   for (bool check : {true, false}) {
     TrackerOptions options;
     options.integrity.enabled = check;
