@@ -348,6 +348,44 @@ TEST(Tracker, PassesALostFrameWithoutRelocalisingIt) {
   EXPECT_FALSE(passing.lost());
 }
 
+// rgbd-tracker answers frames lost on its own while its relocaliser thread holds the
+// tracker, then counts them (Tracker::countPassedFrames): the tracker coasts on as if it had
+// passed them itself. Three trackers lose the room moving at frame 152; one passes frames
+// 153-177, one is told of 25 frames passed, one is not told; the first two relocalise
+// frame 178 alike, the third elsewhere (it coasted less far). Counting while
+// tracking changes nothing; frameError() says why a frame is unusable, as track() does.
+TEST(Tracker, CountingPassedFramesIsPassingThem) {
+  Tracker passing(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Tracker counting(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Tracker uncounted(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  for (Tracker* t : {&passing, &counting, &uncounted}) ASSERT_EQ(feed(t, 0, 151).status, Status::kTracked);
+  counting.countPassedFrames(3);  // not lost: no effect
+  RgbdFrame black = roomFrame(152);
+  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
+  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  for (Tracker* t : {&passing, &counting, &uncounted}) ASSERT_EQ(t->track(black).status, Status::kLost);
+  const size_t passed_frames = 25;
+  for (size_t i = 153; i < 153 + passed_frames; ++i) ASSERT_EQ(passing.passLost(roomFrame(i)).status, Status::kLost);
+  counting.countPassedFrames(passed_frames);
+  const size_t next = 153 + passed_frames;
+  const TrackResult passed = passing.track(roomFrame(next));
+  const TrackResult counted = counting.track(roomFrame(next));
+  const TrackResult not_counted = uncounted.track(roomFrame(next));
+  ASSERT_EQ(passed.status, Status::kRelocalised);
+  EXPECT_LT(positionError(passed.pose.T_w_c, next), 0.02);
+  ASSERT_EQ(not_counted.status, Status::kRelocalised);
+  EXPECT_EQ(counted.status, passed.status);
+  EXPECT_EQ(counted.lost_reason, passed.lost_reason);
+  EXPECT_TRUE(counted.pose.T_w_c.matrix().isApprox(passed.pose.T_w_c.matrix(), 1e-12))
+      << counted.pose.T_w_c.matrix() << "\n" << passed.pose.T_w_c.matrix();
+  // The count matters: a tracker not told coasts from fewer frames, and ends elsewhere.
+  EXPECT_FALSE(not_counted.pose.T_w_c.matrix().isApprox(passed.pose.T_w_c.matrix(), 1e-9));
+  RgbdFrame small = roomFrame(158);
+  cv::resize(small.colour, small.colour, cv::Size(320, 240));
+  EXPECT_NE(counting.frameError(small).find("320x240"), std::string::npos) << counting.frameError(small);
+  EXPECT_EQ(counting.frameError(roomFrame(158)), "");
+}
+
 // A vehicle cannot be where it could not have flown (tracker.relocalise_max_speed_m_s):
 // lost at frame 151, then shown frames 290-299 (1.27-1.39 m from the last pose) stamped
 // as if they came right after it, the tracker stays lost, since 3 m/s for a frame (33 ms)

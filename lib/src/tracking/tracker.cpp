@@ -214,7 +214,12 @@ class Tracker::Impl {
     return result;
   }
 
+  void countPassedFrames(int frames) {
+    if (lost() && frames > 0) lost_frames_ = static_cast<int>(std::min<int64_t>(INT_MAX, int64_t{lost_frames_} + frames));
+  }
+
   bool lost() const { return state_ == TrackingState::kLost && replica_.map().numKeyframes() > 0; }
+  std::string frameError(const RgbdFrame& frame) const;  // why the tracker cannot use it; empty: usable
 
   // In the order track() always did them: the keyframe first, then the local map around
   // the frame's pose (with the new keyframe in it).
@@ -288,7 +293,6 @@ class Tracker::Impl {
     result->pose.utime = frame.utime;
     result->pose.seq = frame.seq;
   }
-  std::string frameError(const RgbdFrame& frame) const;  // why the tracker cannot use it; empty: usable
   void prepareFrame(const RgbdFrame& frame);
   TrackResult initialise(const RgbdFrame& frame);
   TrackResult relocalise(const RgbdFrame& frame);
@@ -1612,7 +1616,9 @@ TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame);
 TrackResult Tracker::trackPose(const RgbdFrame& frame) { return impl_->trackPose(frame); }
 std::optional<KeyframeData> Tracker::finishFrame() { return impl_->finishFrame(); }
 TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(frame); }
+void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); }
 bool Tracker::lost() const { return impl_->lost(); }
+std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }

@@ -289,7 +289,14 @@ class Tracker {
   // lost (where the tracker coasts to, TrackerOptions::relocalise_coast_frames). Not lost
   // (or no map yet): the same as trackPose().
   TrackResult passLost(const RgbdFrame& frame);
+  // Frames a caller answered lost without handing them to the tracker (rgbd-tracker while
+  // its relocaliser thread holds the tracker): counted as passLost() counts a frame; no
+  // effect unless lost.
+  void countPassedFrames(int frames);
   bool lost() const;  // relocalising: the next frame would be relocalised, not tracked
+  // Why the tracker cannot use 'frame' (no colour image, wrong size); empty: usable. Reads
+  // the camera only, so a thread may call it while another tracks.
+  std::string frameError(const RgbdFrame& frame) const;
 
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   bool applyMap(const MapUpdate& update);
