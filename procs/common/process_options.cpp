@@ -33,6 +33,12 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "blocks of at least this size (frames, images) get their own memory mappings, given back to the "
           "system when freed: less resident memory for more latency (128: about 10-16 MB less, 0.7-0.9 ms more "
           "per tracked frame; common/process.h) (0: glibc's default, a threshold that rises to the largest block freed)");
+  r->bind(s, "relocalise_off_frame_path", &relocalise_off_frame_path,
+          "while lost, relocalise on a second thread: the frame being relocalised and those after it "
+          "until it is done are answered lost at once, and the first frame after a relocalisation that "
+          "worked is tracked from its pose (false: relocalise on the tracking thread, each relocalised "
+          "frame's pose as late as its relocalisation; the first pose of a run, in a loaded map too, is "
+          "always found in line)");
   r->bind(s, "keyframe_grey", &keyframe_encoding.jpeg_grey, {{"jpeg", true}, {"png", false}},
           "keyframe image on the link (png is lossless)");
   r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",

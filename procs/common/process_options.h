@@ -39,6 +39,10 @@ struct TrackerProcessOptions {
   // (common/process.h, setMallocMmapThreshold: memory for latency); 0: glibc's dynamic
   // threshold [kB].
   int malloc_mmap_threshold_kb = 0;
+  // While lost, a frame is relocalised on a thread of its own and the frames meanwhile are
+  // answered lost at once (tracker_node.h); false: on the tracking thread, each relocalised
+  // frame's pose as late as its relocalisation.
+  bool relocalise_off_frame_path = true;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
   // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma

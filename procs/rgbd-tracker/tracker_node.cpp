@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
+#include <utility>
 
 #include "common/process.h"
 
@@ -109,8 +110,10 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       continue;
     }
     if (finishing_since == Clock::time_point{}) finishing_since = now;
+    if (relocalising()) continue;  // its keyframe, if any, is still to be sent
     if ((sync_.outbox().empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
+  collectRelocalisation(/*wait=*/true);
   while (!pending_maps_.empty()) applyOldestMap();  // their acknowledgements count
   publishStatus();
   return sync_.outbox().empty() && encoding_.empty() ? 0 : 1;
@@ -128,6 +131,7 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     if (fds[0].revents & POLLIN) local_->handle();
     if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
   }
+  collectRelocalisation(/*wait=*/false);
   if (!backlog_.empty()) {
     Received received = std::move(backlog_.front());
     backlog_.pop_front();
@@ -135,7 +139,7 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     recycle(std::move(received.bytes));
   }
   const auto now = Clock::now();
-  while (!pending_maps_.empty() &&
+  while (!pending_maps_.empty() && !relocalising() &&
          (backlog_.empty() || msBetween(pending_maps_.front().received, now) >= kMaxMapWaitMs)) {
     applyOldestMap();
   }
@@ -178,11 +182,26 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   const RgbdFrame& frame = frame_;
   ++counters_.frames;
-  // Lost with a newer frame waiting: the newer one is relocalised, this one is passed
-  // (Tracker::passLost): relocalisation takes longer than a frame on a large map, and each
-  // frame queued behind it would wait as long again.
-  const bool pass = tracker_.lost() && !backlog_.empty();
-  TrackResult result = pass ? tracker_.passLost(frame) : tracker_.trackPose(frame);
+  collectRelocalisation(/*wait=*/false);
+  TrackResult result;
+  bool pass = false;        // answered without tracking it
+  bool answered = false;    // ...without the tracker (answerLost)
+  bool relocalise = false;  // answered lost now, relocalised on the relocaliser thread
+  if (relocalising()) {
+    result = answerLost(frame, "passed: frame " + std::to_string(relocalising_frame_.seq) + " is being relocalised");
+    frames_while_relocalising_ += result.status == TrackResult::Status::kLost;  // not a bad frame
+    pass = answered = true;
+  } else if (options_.process.relocalise_off_frame_path && counters_.poses > 0 && tracker_.lost() &&
+             tracker_.frameError(frame).empty()) {  // the first pose (a loaded map's too) in line
+    result = answerLost(frame, "relocalising on the relocaliser thread");
+    relocalise = answered = true;
+  } else {
+    // Lost with a newer frame waiting: the newer one is relocalised, this one is passed
+    // (Tracker::passLost): relocalisation takes longer than a frame on a large map, and each
+    // frame queued behind it would wait as long again.
+    pass = tracker_.lost() && !backlog_.empty();
+    result = pass ? tracker_.passLost(frame) : tracker_.trackPose(frame);
+  }
   result.pose.utime = frame.utime;
   result.pose.seq = frame.seq;
   const bool keyframe_in_pose = result.new_keyframe.has_value();
@@ -194,7 +213,7 @@ void TrackerNode::trackFrame(const Received& received) {
     return;
   }
   if (pass) ++counters_.frames_passed;  // not tracked: not in the tracker's own time either
-  else track_ms_.add(result.track_ms);
+  else if (!relocalise) track_ms_.add(result.track_ms);  // a relocalisation's when it is done
   if (result.status == TrackResult::Status::kLost) ++counters_.lost;
   if (hasPose(result.status)) ++counters_.poses;
   if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];
@@ -208,9 +227,20 @@ void TrackerNode::trackFrame(const Received& received) {
   result.pose.latency_ms = (now_us - frame.utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose, map_id_);
   local_->publish(options_.channels.pose, &pose);
+  last_published_T_w_c_ = result.pose.T_w_c;
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame.utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
+  if (answered) {  // the tracker has nothing to finish, and may be the relocaliser's
+    frame_log_.write(result, keyframe_in_pose, FrameLog::Times{0.0, result.pose.latency_ms});
+    if (relocalise) {
+      // The frame is answered: map versions waiting go in now, while the tracker is this
+      // thread's (else, lost, they would wait for a poll that finds no relocalisation running).
+      while (!pending_maps_.empty()) applyOldestMap();
+      startRelocalisation();
+    }
+    return;
+  }
   // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
   const auto start = Clock::now();
   std::optional<KeyframeData> keyframe = tracker_.finishFrame();
@@ -218,6 +248,64 @@ void TrackerNode::trackFrame(const Received& received) {
   after_pose_ms_.add(after_pose_ms);
   frame_log_.write(result, keyframe_in_pose || keyframe.has_value(), FrameLog::Times{after_pose_ms, result.pose.latency_ms});
   if (keyframe) sendKeyframe(std::move(*keyframe));
+}
+
+void TrackerNode::startRelocalisation() {
+  std::swap(frame_, relocalising_frame_);
+  frames_while_relocalising_ = 0;
+  ++relocalisations_started_;
+  relocalisation_ = relocaliser_.submit([this] {
+    relocalised_ = tracker_.trackPose(relocalising_frame_);
+    relocalised_keyframe_ = tracker_.finishFrame();
+  });
+}
+
+void TrackerNode::collectRelocalisation(bool wait) {
+  if (!relocalising()) return;
+  if (!wait && relocalisation_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  const std::shared_future<void> done = std::exchange(relocalisation_, {});
+  done.get();  // the job's exception, if any, is this thread's now
+  track_ms_.add(relocalised_.track_ms);
+  relocalise_ms_.add(relocalised_.track_ms);
+  if (relocalised_.new_keyframe) sendKeyframe(std::move(*relocalised_.new_keyframe));
+  if (relocalised_keyframe_) sendKeyframe(std::move(*relocalised_keyframe_));
+  if (relocalised_.status == TrackResult::Status::kRelocalised) {
+    ++relocalisations_recovered_;
+    relocalised_.pose.seq = relocalising_frame_.seq;
+    if (const std::string event = loss_.update(relocalised_); !event.empty()) {
+      std::cerr << "rgbd-tracker: " << event << " (its pose not published: the next frame's is)\n";
+    }
+  } else {
+    tracker_.countPassedFrames(frames_while_relocalising_);
+  }
+  relocalised_ = TrackResult{};
+  relocalised_keyframe_.reset();
+}
+
+void TrackerNode::readTrackerFigures() {
+  const KeyframeStore* store = tracker_.keyframeStore();
+  tracker_figures_ = TrackerFigures{static_cast<int64_t>(tracker_.map().numPoints()),
+                                    hotKeyframes(tracker_.map()),
+                                    store ? static_cast<int64_t>(store->entries()) : 0,
+                                    store ? store->bytes() / 1024 : 0,
+                                    store ? store->diskBytes() / 1024 : 0,
+                                    store ? store->errors() : 0};
+}
+
+TrackResult TrackerNode::answerLost(const RgbdFrame& frame, const std::string& reason) const {
+  const auto start = Clock::now();
+  TrackResult result;
+  result.pose.state = TrackingState::kLost;
+  result.pose.T_w_c = last_published_T_w_c_;
+  result.pose.utime = frame.utime;
+  result.pose.seq = frame.seq;
+  result.error = tracker_.frameError(frame);
+  if (result.error.empty()) {
+    result.status = TrackResult::Status::kLost;
+    result.lost_reason = reason;
+  }
+  result.track_ms = msBetween(start, Clock::now());
+  return result;
 }
 
 // The rung is chosen now, from the bucket as it is; the encoding (JPEG, zlib, LCM: a few ms)
@@ -285,7 +373,10 @@ void TrackerNode::onMap(const lcm::ReceiveBuffer* buffer, const std::string& cha
     return;
   }
   ++counters_.maps_received;
-  if (pending_maps_.size() >= kMaxPendingMaps) applyOldestMap();
+  if (pending_maps_.size() >= kMaxPendingMaps) {
+    collectRelocalisation(/*wait=*/true);  // the tracker is this thread's again
+    applyOldestMap();
+  }
   pending_maps_.push_back({std::move(*update), Clock::now()});
 }
 
@@ -348,7 +439,8 @@ void TrackerNode::publishStatus() {
   status.state = toString(state_);
   const Counters& c = counters_;
   const MemoryUsage memory = memoryUsage();
-  const KeyframeStore* store = tracker_.keyframeStore();
+  if (!relocalising()) readTrackerFigures();  // else the relocaliser's: the last read
+  const TrackerFigures& t = tracker_figures_;
   status.counters = {{"map_id", map_id_},
                      {"map_version", sync_.follower().version()},
                      {"map_version_newest_seen", sync_.follower().newestSeen()},
@@ -365,12 +457,12 @@ void TrackerNode::publishStatus() {
                      {"keyframes_encoding", static_cast<int64_t>(encoding_.size())},
                      {"keyframes_over_budget", c.keyframes_over_budget},
                      {"keyframe_rung", c.last_rung},
-                     {"points", static_cast<int64_t>(tracker_.map().numPoints())},
-                     {"keyframes_hot", hotKeyframes(tracker_.map())},
-                     {"keyframe_store_entries", store ? static_cast<int64_t>(store->entries()) : 0},
-                     {"keyframe_store_kb", store ? store->bytes() / 1024 : 0},
-                     {"keyframe_store_disk_kb", store ? store->diskBytes() / 1024 : 0},
-                     {"keyframe_store_errors", store ? store->errors() : 0},
+                     {"points", t.points},
+                     {"keyframes_hot", t.keyframes_hot},
+                     {"keyframe_store_entries", t.store_entries},
+                     {"keyframe_store_kb", t.store_kb},
+                     {"keyframe_store_disk_kb", t.store_disk_kb},
+                     {"keyframe_store_errors", t.store_errors},
                      {"frames", c.frames},
                      {"frames_skipped", c.frames_skipped},
                      {"frames_passed", c.frames_passed},
@@ -383,6 +475,8 @@ void TrackerNode::publishStatus() {
                      {"frames_depth_aided", c.depth_aided},
                      {"lost_episodes", loss_.episodes()},
                      {"relocalisations", loss_.relocalisations()},
+                     {"relocalisations_off_frame_path", relocalisations_started_},
+                     {"relocalisations_off_frame_path_recovered", relocalisations_recovered_},
                      {"bad_frames", c.bad_frames},
                      {"bad_frame_messages", c.bad_frame_messages},
                      {"bad_map_messages", c.bad_map_messages},
@@ -404,6 +498,8 @@ void TrackerNode::publishStatus() {
                        {"arrival_ms_median", arrival_ms_.quantile(0.5)},
                        {"frame_ms_median", frame_ms_.quantile(0.5)},
                        {"frame_ms_p99", frame_ms_.quantile(0.99)},
+                       {"relocalise_ms_median", relocalise_ms_.quantile(0.5)},
+                       {"relocalise_ms_p99", relocalise_ms_.quantile(0.99)},
                        {"after_pose_ms_median", after_pose_ms_.quantile(0.5)},
                        {"after_pose_ms_max", after_pose_ms_.quantile(1.0)},
                        {"map_apply_ms_median", map_apply_ms_.quantile(0.5)},
@@ -428,6 +524,10 @@ void TrackerNode::printSummary() const {
                               TrackingState::kLost, TrackingState::kRelocalised}) {
     std::printf("frames_%s %ld\n", toString(state), state_frames_[static_cast<size_t>(state)]);
   }
+  std::printf("relocalisations_off_frame_path %ld\nrelocalisations_off_frame_path_recovered %ld\n"
+              "relocalise_ms_median %.3f\nrelocalise_ms_p99 %.3f\nrelocalise_ms_max %.3f\n",
+              relocalisations_started_, relocalisations_recovered_, relocalise_ms_.quantile(0.5),
+              relocalise_ms_.quantile(0.99), relocalise_ms_.quantile(1.0));
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
