@@ -84,6 +84,18 @@ Status setMallocMmapThreshold(int threshold_kb) {
 #endif
 }
 
+Status setMallocArenaMax(int arenas) {
+  if (arenas == 0) return Status{};
+#if defined(__SANITIZE_ADDRESS__)
+  return Error{"the malloc of AddressSanitizer has no arenas"};
+#else
+  if (arenas < 0 || mallopt(M_ARENA_MAX, arenas) != 1) {
+    return Error{"malloc refused at most " + std::to_string(arenas) + " arenas"};
+  }
+  return Status{};
+#endif
+}
+
 void printPeakRss() {
   const MemoryUsage usage = memoryUsage();
   if (usage.peak_rss_kb < 0) {

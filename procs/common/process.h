@@ -76,6 +76,14 @@ int realtimePriority();
 // 32 MB, or not glibc's: AddressSanitizer's has no threshold). 0 changes nothing.
 Status setMallocMmapThreshold(int threshold_kb);
 
+// At most 'arenas' malloc arenas for the process's threads (glibc's M_ARENA_MAX; 0: glibc's
+// default, 8 per core). glibc gives each thread that allocates while the arenas it knows
+// are busy an arena of its own, and what a thread frees stays resident in that arena, so
+// every thread of the tracker (LCM's receive threads, the encoder, the keyframe worker, the
+// relocaliser) keeps its own high-water mark. Set before the threads start. An error when
+// the allocator refuses (not glibc's: AddressSanitizer's has no arenas).
+Status setMallocArenaMax(int arenas);
+
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);
 

@@ -80,6 +80,9 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   if (Status set = setMallocMmapThreshold(options_.process.malloc_mmap_threshold_kb); !set) {
     std::cerr << "rgbd-tracker: warning: tracker_node.malloc_mmap_threshold_kb: " << set.error() << "\n";
   }
+  if (Status set = setMallocArenaMax(options_.process.malloc_arena_max); !set) {
+    std::cerr << "rgbd-tracker: warning: tracker_node.malloc_arena_max: " << set.error() << "\n";
+  }
   const int priority = options_.process.realtime_priority;
   if (priority > 0) {
     if (Status set = setRealtimePriority(priority, /*reset_on_fork=*/false); !set) {

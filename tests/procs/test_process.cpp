@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace rgbdslam {
 namespace {
@@ -110,6 +111,51 @@ TEST(MallocMmapThreshold, LargeBlocksGetTheirOwnMappingsAgain) {
         std::exit(mapped_blocks_with(1u << 20) == none + 1 ? 0 : 2);
       },
       testing::ExitedWithCode(0), "");
+#endif
+}
+
+// tracker_node.malloc_arena_max: with at most one arena, threads that allocate share the
+// main arena (malloc_info lists one heap); without the limit, glibc gives them their own.
+// Each case in a child process: arenas, once made, stay.
+TEST(MallocArenaMax, ThreadsShareTheArenasAllowed) {
+#if defined(__SANITIZE_ADDRESS__)
+  EXPECT_FALSE(setMallocArenaMax(1));
+  GTEST_SKIP() << "AddressSanitizer's malloc has no arenas: the refusal was checked";
+#else
+  auto heaps_after_threads = [] {
+    std::vector<std::thread> threads;
+    for (int i = 0; i < 3; ++i) {
+      threads.emplace_back([] {
+        [[maybe_unused]] static void* volatile escaped;
+        void* block = std::malloc(4096);
+        escaped = block;
+        std::free(block);
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    char* text = nullptr;
+    size_t size = 0;
+    FILE* out = open_memstream(&text, &size);
+    malloc_info(0, out);
+    std::fclose(out);
+    int heaps = 0;
+    for (const char* at = text; (at = std::strstr(at, "<heap nr=")) != nullptr; ++at) ++heaps;
+    std::free(text);
+    return heaps;
+  };
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  EXPECT_EXIT(
+      {
+        if (!setMallocArenaMax(1)) std::exit(3);
+        std::exit(heaps_after_threads() == 1 ? 0 : 2);
+      },
+      testing::ExitedWithCode(0), "");
+  EXPECT_EXIT(std::exit(heaps_after_threads() > 1 ? 0 : 2), testing::ExitedWithCode(0), "")
+      << "glibc's default gives threads arenas of their own";
+  EXPECT_TRUE(setMallocArenaMax(0));  // changes nothing
+  const Status negative = setMallocArenaMax(-1);
+  ASSERT_FALSE(negative);
+  EXPECT_NE(negative.error().find("arenas"), std::string::npos) << negative.error();
 #endif
 }
 
