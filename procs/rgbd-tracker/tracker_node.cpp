@@ -185,7 +185,6 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   const RgbdFrame& frame = frame_;
   ++counters_.frames;
-  collectRelocalisation(/*wait=*/false);
   TrackResult result;
   bool pass = false;        // answered without tracking it
   bool answered = false;    // ...without the tracker (answerLost)
@@ -194,8 +193,9 @@ void TrackerNode::trackFrame(const Received& received) {
     result = answerLost(frame, "passed: frame " + std::to_string(relocalising_frame_.seq) + " is being relocalised");
     frames_while_relocalising_ += result.status == TrackResult::Status::kLost;  // not a bad frame
     pass = answered = true;
-  } else if (options_.process.relocalise_off_frame_path && counters_.poses > 0 && tracker_.lost() &&
-             tracker_.frameError(frame).empty()) {  // the first pose (a loaded map's too) in line
+  } else if (options_.process.relocalise_off_frame_path && counters_.poses > 0 && tracker_.lost()) {
+    // The first pose (a loaded map's too) is found in line. A bad frame returns below,
+    // before a relocalisation starts.
     result = answerLost(frame, "relocalising on the relocaliser thread");
     relocalise = answered = true;
   } else {
@@ -274,7 +274,6 @@ void TrackerNode::collectRelocalisation(bool wait) {
   if (relocalised_keyframe_) sendKeyframe(std::move(*relocalised_keyframe_));
   if (relocalised_.status == TrackResult::Status::kRelocalised) {
     ++relocalisations_recovered_;
-    relocalised_.pose.seq = relocalising_frame_.seq;
     if (const std::string event = loss_.update(relocalised_); !event.empty()) {
       std::cerr << "rgbd-tracker: " << event << " (its pose not published: the next frame's is)\n";
     }
