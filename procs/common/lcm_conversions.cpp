@@ -414,6 +414,7 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   msg.num_measurements = static_cast<int32_t>(msg.measurements.size());
   for (const auto& p : keyframe.new_points) msg.new_points.push_back(toLcm(p));
   msg.num_new_points = static_cast<int32_t>(msg.new_points.size());
+  msg.new_part = keyframe.new_part;
   return msg;
 }
 
@@ -491,6 +492,7 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   keyframe.map_id = msg.map_id;
   keyframe.id = msg.keyframe_id;
   keyframe.T_w_c = *T_w_c;
+  keyframe.new_part = msg.new_part;
   if (Status s = decodeGrey(msg, &keyframe); !s) return Error{what + s.error()};
   if (msg.depth_format != rgbdslam::keyframe_t::DEPTH_NONE) {  // the inverse-depth decoder reads the scale
     if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{what + s.error()};
@@ -517,6 +519,7 @@ rgbdslam::map_t toLcm(const MapUpdate& update) {
     rgbdslam::keyframe_pose_t out;
     out.keyframe_id = kf.id;
     putPose(kf.T_w_c, out.position, out.orientation);
+    out.part = kf.part;
     msg.keyframes.push_back(out);
   }
   msg.num_keyframes = static_cast<int32_t>(msg.keyframes.size());
@@ -563,7 +566,11 @@ Status decodeMapContents(const rgbdslam::map_t& msg, MapUpdate* update) {
     if (Status s = checkId(kf.keyframe_id, what); !s) return s;
     auto T_w_c = getPose(kf.position, kf.orientation);
     if (!T_w_c) return Error{what + " " + T_w_c.error()};
-    update->keyframes.push_back({kf.keyframe_id, *T_w_c});
+    // A part is named by the keyframe that started it: never a later one.
+    if (kf.part < 0 || kf.part > kf.keyframe_id) {
+      return Error{what + " in part " + std::to_string(kf.part) + " (need 0 <= part <= keyframe id)"};
+    }
+    update->keyframes.push_back({kf.keyframe_id, *T_w_c, kf.part});
   }
   for (const auto& p : msg.points) {
     auto point = fromLcm(p);

@@ -111,6 +111,10 @@ void printKeyframesKept(const KeyframesKept& kept) {
               kept.gauge, kept.young, kept.few_points, kept.not_redundant, kept.bridge, kept.redundant);
 }
 
+void printMapParts(const MapParts& parts) {
+  std::printf("map_parts_started %ld\nmap_parts_joined %ld\nmap_parts %d\n", parts.started, parts.joined, parts.now);
+}
+
 void printLoopClosures(const LoopClosureCounters& loops) {
   std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n"
               "loops_beyond_drift %ld\nloops_ambiguous %ld\n",

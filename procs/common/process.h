@@ -11,6 +11,7 @@
 #include <string>
 
 #include "rgbdslam/mapping/loop_closer.h"
+#include "rgbdslam/mapping/mapper.h"
 #include "rgbdslam/mapping/map_maintenance.h"
 #include "rgbdslam/util/expected.h"
 #include "rgbdslam/tracking/keyframe_store.h"
@@ -42,6 +43,8 @@ void printPeakRss();
 void printKeyframesKept(const KeyframesKept& kept);
 // loop_* and loops_* lines on stdout: the loop closer's counters (loop_closer.h).
 void printLoopClosures(const LoopClosureCounters& loops);
+// The mapper's parts (mapper.h, "Parts"): started, joined by the loop closer, in the map now.
+void printMapParts(const MapParts& parts);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.

@@ -86,7 +86,7 @@ class WireReader {
 // Wire sizes of the nested structs (lcmtypes/*.lcm).
 constexpr size_t kMeasurementBytes = 8 + 4 + 4 + 1 + 4;          // measurement_t
 constexpr size_t kMapPointBytes = 8 + 3 * 4 + 8 + 4 + 4 + 1;     // map_point_t
-constexpr size_t kKeyframePoseBytes = 8 + 3 * 8 + 4 * 8;          // keyframe_pose_t
+constexpr size_t kKeyframePoseBytes = 8 + 3 * 8 + 4 * 8 + 8;      // keyframe_pose_t
 constexpr size_t kPointPositionBytes = 8 + 3 * 4;                 // point_position_t
 constexpr size_t kPoseBytes = 8 + 8 + 8 + 3 * 8 + 4 * 8 + 1 + 4 + 4 + 4;  // pose_t after the fingerprint
 
@@ -118,6 +118,7 @@ Status checkWire(const rgbdslam::keyframe_t*, const void* data, size_t size) {
   imageBytes(r, "depth_size", "depth");
   r.array(r.count("num_measurements", kMaxKeyframePoints), kMeasurementBytes, "measurements");
   r.array(r.count("num_new_points", kMaxKeyframePoints), kMapPointBytes, "new_points");
+  r.skip(1, "new_part");
   return r.finish();
 }
 

@@ -241,6 +241,7 @@ void MapperNode::printSummary() const {
   }
   std::cerr << "\n";
   printLoopClosures(mapper_.loopClosures());  // the worker has stopped
+  printMapParts(mapper_.parts());
   std::printf("keyframes_in_map %zu\nkeyframes_culled %ld\n", mapper_.map().numKeyframes(), mapper_.keyframesCulled());
   printKeyframesKept(mapper_.keyframesKept());
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries

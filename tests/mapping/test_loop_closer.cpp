@@ -1,9 +1,12 @@
 // LoopCloser: a return to a place mapped long before takes the drift out of every keyframe
-// and moves the points with their keyframes; a lookalike place far away closes nothing.
+// and moves the points with their keyframes; a lookalike place far away closes nothing; a
+// part of the map started where the tracker was lost joins the rest where it sees a place of
+// it, within the reach of the vehicle's speed, and not at a lookalike place beyond it.
 #include "rgbdslam/mapping/loop_closer.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -103,6 +106,128 @@ TEST(LoopCloser, ClosesNothingInALookalikeRoom) {
   EXPECT_GT(closer.counters().queries, 0);
   EXPECT_EQ(closer.counters().closed, 0);
   EXPECT_TRUE(changes.keyframes.empty());
+}
+
+// The room mapped over frames 0-440 (part 0), then, after a loss, a new part over frames
+// 800-1000 (which see again the place of frames ~0-450) whose poses are the truth moved by
+// what the tracker coasted wrong: 1.5 m and 20 deg. Returns the keyframes' true poses.
+std::vector<SE3> mapWithASecondPart(Map* map, LoopCloser* closer, MapChanges* changes,
+                                    std::vector<LoopClosureResult>* results) {
+  const SE3 coasted_wrong(Mat3(Eigen::AngleAxisd(20.0 * M_PI / 180.0, Vec3::UnitY()).toRotationMatrix()),
+                          Vec3(1.5, 0.0, -0.5));
+  std::vector<SE3> truth;
+  KeyframeId id = 0;
+  for (const bool second : {false, true}) {
+    const KeyframeId part = id;
+    for (int frame = second ? 800 : 0; frame <= (second ? 1000 : 440); frame += kLoopFrameStep) {
+      truth.push_back(loopRoom().groundTruthPose(static_cast<size_t>(frame)));
+      Keyframe* kf = map->addKeyframe(loopKeyframe(id, frame, second ? coasted_wrong * truth.back() : truth.back()));
+      kf->part = part;
+      MapPoint point;  // one point per keyframe, 2 m in front of it
+      point.id = id;
+      point.source_keyframe = id;
+      point.p_w = kf->T_w_c * Vec3(0.0, 0.0, 2.0);
+      map->addPoint(point);
+      results->push_back(closer->onKeyframe(map, id, changes));
+      ++id;
+    }
+  }
+  return truth;
+}
+
+TEST(LoopCloser, JoinsANewPartWhereItSeesAPlaceOfTheOld) {
+  Map map;
+  LoopCloser closer(loopRoom().camera(), LoopClosureOptions{});
+  MapChanges changes;
+  std::vector<LoopClosureResult> results;
+  const std::vector<SE3> truth = mapWithASecondPart(&map, &closer, &changes, &results);
+  const KeyframeId second_part = 23;  // frame 800's keyframe
+  const auto joined = std::find_if(results.begin(), results.end(), [](const LoopClosureResult& r) { return r.joined_part >= 0; });
+  ASSERT_NE(joined, results.end()) << closer.counters().queries << " queries, " << closer.counters().recognised << " recognised";
+  EXPECT_EQ(joined->joined_part, second_part);
+  EXPECT_EQ(joined->joined_to, 0);
+  EXPECT_TRUE(joined->closed);
+  EXPECT_GT(joined->correction_m, 1.0);
+  EXPECT_EQ(closer.counters().parts_joined, 1);
+  double worst_m = 0.0;
+  for (const auto& [id, kf] : map.keyframes()) {
+    EXPECT_EQ(kf->part, 0) << "keyframe " << id;
+    if (id < second_part) EXPECT_LT(loopErrorM(kf->T_w_c, truth[id]), 1e-6) << "the old part moved: keyframe " << id;
+    else worst_m = std::max(worst_m, loopErrorM(kf->T_w_c, truth[id]));
+    EXPECT_LT((kf->T_c_w() * map.point(id)->p_w - Vec3(0.0, 0.0, 2.0)).norm(), 1e-9) << "point of keyframe " << id;
+  }
+  EXPECT_LT(worst_m, 0.05) << "the joined part's keyframes, off the truth by up to 1.6 m before";
+  std::printf("part %ld joined to part 0 by keyframe %ld (with %ld): correction %.2f m %.1f deg, its keyframes %.3f m "
+              "off the truth after\n", static_cast<long>(second_part), static_cast<long>(joined - results.begin()),
+              static_cast<long>(joined->with), joined->correction_m, joined->correction_deg, worst_m);
+}
+
+// The same join, but the vehicle cannot have flown from the last keyframe before the loss to
+// where the join puts the new part's first keyframe: refused, the parts stay apart.
+TEST(LoopCloser, JoinsNoPartBeyondTheReachOfTheVehiclesSpeed) {
+  Map map;
+  LoopClosureOptions options;
+  options.join_max_speed_m_s = 0.01;  // 12 s between the parts: 0.12 m
+  options.join_margin_m = 0.0;
+  LoopCloser closer(loopRoom().camera(), options);
+  MapChanges changes;
+  std::vector<LoopClosureResult> results;
+  mapWithASecondPart(&map, &closer, &changes, &results);
+  EXPECT_EQ(closer.counters().parts_joined, 0);
+  EXPECT_EQ(closer.counters().closed, 0);
+  EXPECT_GT(closer.counters().beyond_drift, 0);
+  EXPECT_EQ(map.keyframe(30)->part, 23);
+}
+
+// Two identical rooms 10 m apart, the second entered after the first (part 0 maps the first
+// room's frames 0-440, then the twin's frames 0-200). Lost there for a second, the tracker
+// starts a new part over the twin's frames 240-440 (its coasted pose 0.3 m off). Its places
+// look exactly like the first room's, but a join there would put the vehicle 10 m from
+// where it was lost a second before: only the twin's own keyframes may take the part.
+TEST(LoopCloser, JoinsNoPartToALookalikeRoomBeyondReach) {
+  Map map;
+  LoopCloser closer(loopRoom().camera(), LoopClosureOptions{});
+  MapChanges changes;
+  const SE3 twin(Mat3::Identity(), Vec3(10.0, 0.0, 0.0));
+  const SE3 coasted_wrong(Mat3::Identity(), Vec3(0.3, 0.0, 0.0));
+  const int64_t frame_us = loopRoom().render(1).utime - loopRoom().render(0).utime;
+  struct Stretch {
+    int first_frame, last_frame;
+    SE3 world_from_truth;
+    bool new_part;
+  };
+  KeyframeId id = 0, part = 0, first_twin_id = -1, new_part_id = -1;
+  int64_t utime = 0;
+  std::vector<SE3> truth;
+  long refused_before_the_part = 0;
+  for (const Stretch& stretch : {Stretch{0, 440, SE3(), false}, Stretch{0, 200, twin, false},
+                                 Stretch{240, 440, coasted_wrong * twin, true}}) {
+    if (stretch.new_part) part = id, new_part_id = id, refused_before_the_part = closer.counters().beyond_drift;
+    if (stretch.first_frame == 0 && id > 0) first_twin_id = id;
+    for (int frame = stretch.first_frame; frame <= stretch.last_frame; frame += kLoopFrameStep) {
+      const SE3 T_true = loopRoom().groundTruthPose(static_cast<size_t>(frame));
+      truth.push_back((stretch.new_part ? coasted_wrong.inverse() * stretch.world_from_truth : stretch.world_from_truth) * T_true);
+      Keyframe* kf = map.addKeyframe(loopKeyframe(id, frame, stretch.world_from_truth * T_true));
+      kf->part = part;
+      kf->utime = utime;
+      utime += kLoopFrameStep * frame_us;
+      const LoopClosureResult result = closer.onKeyframe(&map, id, &changes);
+      if (result.joined_part >= 0) {
+        EXPECT_GE(result.with, first_twin_id) << "keyframe " << id << " joined its part to the first room's keyframe " << result.with;
+      }
+      ++id;
+    }
+    if (stretch.first_frame == 0 && id > 0 && !stretch.new_part) utime += 1000000 - kLoopFrameStep * frame_us;  // 1 s lost
+  }
+  // The new part has too few keyframes for a loop within itself: what was refused while it
+  // grew was refused by the join's speed bound (the first room's places).
+  EXPECT_GT(closer.counters().beyond_drift, refused_before_the_part) << "no place of the first room was refused";
+  for (KeyframeId k = new_part_id; k < id; ++k) {
+    EXPECT_LT(loopErrorM(map.keyframe(k)->T_w_c, truth[k]), 0.35) << "keyframe " << k;
+  }
+  std::printf("new part in the twin: %ld queries, %ld refused beyond reach while it grew, %ld parts joined\n",
+              closer.counters().queries, closer.counters().beyond_drift - refused_before_the_part,
+              closer.counters().parts_joined);
 }
 
 }  // namespace

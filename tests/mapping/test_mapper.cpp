@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -316,6 +317,64 @@ TEST(Mapper, IsDeterministic) {
   }
   for (size_t i = 0; i < a.keyframes.size(); ++i) {
     EXPECT_EQ(a.keyframes[i].T_w_c.matrix(), b.keyframes[i].T_w_c.matrix());
+  }
+}
+
+// Keyframe 4 starts a new part (the tracker was lost, and started again from that frame at
+// the pose it coasted to, 0.5 m and 10 deg off): it and the keyframes after it, all in the
+// new part's frame, keep to themselves. Their measurements of the old part's points (which
+// the coasted frame would put in the wrong place) are dropped, bundle adjustment holds the
+// part's first keyframe where it is, and each part comes out right in its own frame.
+TEST(Mapper, ANewPartOfTheMapKeepsToItself) {
+  Sequence seq = makeSequence(SlamMode::kDepthBa, 8);
+  const SE3 coasted_wrong(Mat3(expSO3(Vec3(0.0, 10.0 * kDegree, 0.0))), Vec3(0.5, 0.0, 0.2));
+  const KeyframeId first = 4;
+  for (KeyframeId k = first; k < 8; ++k) {
+    KeyframeData& kf = seq.keyframes[k];
+    kf.T_w_c = coasted_wrong * kf.T_w_c;
+    for (MapPointData& p : kf.new_points) p.p_w = coasted_wrong * p.p_w;
+    // Tracking in the new part's frame finds few of the old part's points (a lookalike
+    // patch here and there): every 10th measurement of them is kept.
+    int old_points = 0;
+    kf.measurements.erase(std::remove_if(kf.measurements.begin(), kf.measurements.end(),
+                                         [&](const Measurement& m) {
+                                           return m.point_id < provisionalPointId(first, 0) && old_points++ % 10 != 0;
+                                         }),
+                          kf.measurements.end());
+  }
+  KeyframeData& start = seq.keyframes[first];
+  start.new_part = true;
+  start.measurements.erase(std::remove_if(start.measurements.begin(), start.measurements.end(),
+                                          [](const Measurement& m) { return !isProvisionalPointOf(m.point_id, first); }),
+                           start.measurements.end());
+  const SE3 start_pose = start.T_w_c;
+  MapperOptions options;
+  options.cull.cull_keyframes = false;
+  Mapper mapper(seq.camera, options, SlamMode::kDepthBa);
+  int cross_part = 0;
+  for (const KeyframeData& kf : seq.keyframes) {
+    const MapperResult r = mapper.addKeyframe(kf);
+    ASSERT_EQ(r.status, MapperResult::Status::kIntegrated) << r.error;
+    cross_part += r.cross_part_measurements;
+  }
+  EXPECT_LT(refineUntilDone(&mapper), 60);
+  const Map& map = mapper.map();
+  EXPECT_GT(cross_part, 0);
+  EXPECT_EQ(mapper.parts().started, 1);
+  EXPECT_EQ(mapper.parts().now, 2);
+  for (const auto& [id, kf] : map.keyframes()) {
+    EXPECT_EQ(kf->part, id < first ? 0 : first) << "keyframe " << id;
+    for (const auto& [pid, m] : kf->measurements()) {
+      EXPECT_EQ(map.partOfPoint(*map.point(pid)), kf->part) << "keyframe " << id << " measures point " << pid;
+    }
+  }
+  EXPECT_EQ(map.keyframe(first)->T_w_c.matrix(), start_pose.matrix()) << "the new part's gauge";
+  // Each part right in its own frame: the old one in the world, the new one relative to its
+  // first keyframe (which carries the input's 2 cm / 1 deg error).
+  for (KeyframeId k = 1; k < 8; ++k) {
+    const SE3 estimated = k < first ? map.keyframe(k)->T_w_c : map.keyframe(first)->T_w_c.inverse() * map.keyframe(k)->T_w_c;
+    const SE3 actual = k < first ? seq.truth[k] : seq.truth[first].inverse() * seq.truth[k];
+    EXPECT_LT((estimated.translation() - actual.translation()).norm(), 0.02) << "keyframe " << k;
   }
 }
 

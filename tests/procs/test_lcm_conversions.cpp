@@ -185,6 +185,27 @@ TEST(LcmConversions, KeyframeRoundTrip) {
   ASSERT_EQ(back->new_points.size(), 1u);
   EXPECT_EQ(back->new_points[0].id, 3 * kPointsPerKeyframe + 1);
   EXPECT_EQ(back->new_points[0].p_w, Vec3(1, 2, 3));
+  EXPECT_FALSE(back->new_part);
+  KeyframeData starting = keyframe;  // the first keyframe of a new part of the map
+  starting.new_part = true;
+  auto part = fromLcm(*decodeMessage<rgbdslam::keyframe_t>(encode(toLcm(starting)).data(), encode(toLcm(starting)).size()));
+  ASSERT_TRUE(part) << part.error();
+  EXPECT_TRUE(part->new_part);
+}
+
+// A keyframe's part is named by the keyframe that started it: never a later one, never < 0.
+TEST(LcmConversions, MapWithAKeyframeInALaterPartIsRejected) {
+  MapUpdate update = test::sampleMapUpdate();
+  update.keyframes[0].part = update.keyframes[0].id;  // it started its part: fine
+  auto back = fromLcm(toLcm(update));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->keyframes[0].part, update.keyframes[0].id);
+  for (const KeyframeId part : {update.keyframes[0].id + 1, KeyframeId{-1}}) {
+    update.keyframes[0].part = part;
+    const auto refused = fromLcm(toLcm(update));
+    ASSERT_FALSE(refused) << "part " << part;
+    EXPECT_NE(refused.error().find("part"), std::string::npos) << refused.error();
+  }
 }
 
 TEST(LcmConversions, MapRoundTrip) {

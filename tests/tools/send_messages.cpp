@@ -111,7 +111,7 @@ std::vector<uint8_t> hostileMessage(const std::string& kind, int64_t map_id) {
   }
   if (kind == "keyframe-huge-counts") {
     auto bytes = spoiledKeyframe(map_id, [](rgbdslam::keyframe_t& m) { m.measurements.clear(), m.new_points.clear(), m.num_measurements = m.num_new_points = 0; });
-    putBigEndian32(bytes, bytes.size() - 8, 100000000);  // num_measurements
+    putBigEndian32(bytes, bytes.size() - 9, 100000000);  // num_measurements (then num_new_points, new_part)
     return bytes;
   }
   if (kind == "status-huge-counts") {

@@ -152,10 +152,15 @@ std::vector<KeyframeId> Map::observers(PointId id) const {
   return it == observers_.end() ? std::vector<KeyframeId>{} : it->second;
 }
 
-std::vector<KeyframeId> Map::nearestKeyframes(const SE3& T_w_c, size_t n, double metres_per_radian) const {
+namespace {
+
+std::vector<KeyframeId> nearestOf(const std::map<KeyframeId, std::unique_ptr<Keyframe>>& keyframes,
+                                  const SE3& T_w_c, size_t n, double metres_per_radian,
+                                  const std::optional<KeyframeId>& part) {
   std::vector<std::pair<double, KeyframeId>> scored;
   const Vec3 axis = T_w_c.rotation() * Vec3::UnitZ();
-  for (const auto& [id, kf] : keyframes_) {
+  for (const auto& [id, kf] : keyframes) {
+    if (part && kf->part != *part) continue;
     const double distance = (kf->T_w_c.translation() - T_w_c.translation()).norm();
     const Vec3 kf_axis = kf->T_w_c.rotation() * Vec3::UnitZ();
     const double angle = std::acos(std::clamp(axis.dot(kf_axis), -1.0, 1.0));
@@ -165,6 +170,21 @@ std::vector<KeyframeId> Map::nearestKeyframes(const SE3& T_w_c, size_t n, double
   std::vector<KeyframeId> out;
   for (size_t i = 0; i < scored.size() && i < n; ++i) out.push_back(scored[i].second);
   return out;
+}
+
+}  // namespace
+
+std::vector<KeyframeId> Map::nearestKeyframes(const SE3& T_w_c, size_t n, double metres_per_radian) const {
+  return nearestOf(keyframes_, T_w_c, n, metres_per_radian, std::nullopt);
+}
+
+std::vector<KeyframeId> Map::nearestKeyframesInPart(const SE3& T_w_c, size_t n, KeyframeId part) const {
+  return nearestOf(keyframes_, T_w_c, n, 0.5, part);
+}
+
+KeyframeId Map::partOfPoint(const MapPoint& point) const {
+  const Keyframe* source = keyframe(point.source_keyframe);
+  return source ? source->part : -1;
 }
 
 std::vector<KeyframeId> Map::keyframesWithin(const SE3& T_w_c, double radius_m) const {

@@ -24,19 +24,20 @@ MapUpdate MapDiffer::delta(const Map& map, const MapChanges& changes, MapChanges
     const Keyframe* kf = map.keyframe(id);
     if (!kf) continue;
     auto it = keyframes_.find(id);
-    if (held_back && it != keyframes_.end() &&
-        (kf->T_w_c.translation() - it->second.translation()).norm() <= kHoldAtMost * options_.keyframe_move_m &&
-        kf->T_w_c.rotation().angularDistance(it->second.rotation()) <= kHoldAtMost * options_.keyframe_turn_rad) {
+    const bool renamed = it != keyframes_.end() && it->second.part != kf->part;  // its part joined another
+    if (held_back && it != keyframes_.end() && !renamed &&
+        (kf->T_w_c.translation() - it->second.T_w_c.translation()).norm() <= kHoldAtMost * options_.keyframe_move_m &&
+        kf->T_w_c.rotation().angularDistance(it->second.T_w_c.rotation()) <= kHoldAtMost * options_.keyframe_turn_rad) {
       held_back->keyframes.insert(id);
       continue;
     }
     const bool moved =
-        it == keyframes_.end() ||
-        (kf->T_w_c.translation() - it->second.translation()).norm() > options_.keyframe_move_m ||
-        kf->T_w_c.rotation().angularDistance(it->second.rotation()) > options_.keyframe_turn_rad;
+        it == keyframes_.end() || renamed ||
+        (kf->T_w_c.translation() - it->second.T_w_c.translation()).norm() > options_.keyframe_move_m ||
+        kf->T_w_c.rotation().angularDistance(it->second.T_w_c.rotation()) > options_.keyframe_turn_rad;
     if (!moved) continue;
-    update.keyframes.push_back({id, kf->T_w_c});
-    keyframes_[id] = kf->T_w_c;
+    update.keyframes.push_back({id, kf->T_w_c, kf->part});
+    keyframes_[id] = PublishedKeyframe{kf->T_w_c, kf->part};
   }
   for (PointId id : changes.points) {
     const MapPoint* point = map.point(id);

@@ -36,23 +36,24 @@ MapBaProblem buildBaProblem(const Map& map, const PinholeCamera& camera,
     }
   }
   std::map<KeyframeId, int> keyframe_index;
-  int fixed_count = 0;
+  std::map<KeyframeId, int> fixed_in_part;  // parts (Keyframe::part) share no measurement
   for (const auto& [kf, pids] : seen_by) {
     const bool fixed = kf == 0 || free_keyframes.count(kf) == 0;
-    fixed_count += fixed ? 1 : 0;
+    fixed_in_part[map.keyframe(kf)->part] += fixed ? 1 : 0;
     keyframe_index[kf] = static_cast<int>(ba.problem.keyframes.size());
     ba.problem.keyframes.push_back({kf, map.keyframe(kf)->T_w_c, fixed});
   }
-  // Gauge: fix the oldest free keyframes until enough are fixed.
+  // Gauge, in every part: fix its oldest free keyframes until enough are fixed.
   for (auto& k : ba.problem.keyframes) {
-    if (fixed_count >= min_fixed_keyframes) break;
-    if (!k.fixed) k.fixed = true, ++fixed_count;
+    int& fixed_count = fixed_in_part[map.keyframe(k.id)->part];
+    if (fixed_count < min_fixed_keyframes && !k.fixed) k.fixed = true, ++fixed_count;
   }
   std::map<PointId, int> point_index;
   for (PointId pid : point_ids) {
     point_index[pid] = static_cast<int>(ba.problem.points.size());
     const MapPoint* point = map.point(pid);
-    const bool fixed = fix_initial_points && point->source_keyframe == 0;
+    const Keyframe* source = map.keyframe(point->source_keyframe);
+    const bool fixed = fix_initial_points && source && source->part == source->id;  // a part's first
     ba.problem.points.push_back({pid, point->p_w, fixed});
   }
   for (const auto& [kf, pids] : seen_by) {

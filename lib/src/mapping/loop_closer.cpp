@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <set>
 
 namespace rgbdslam {
@@ -28,6 +29,23 @@ std::vector<KeyframeId> keyframesSharingPoints(const Map& map, const Keyframe& k
   return {sharing.begin(), sharing.end()};
 }
 
+// The gauge: the oldest keyframe of each connected part of the graph is fixed (of a map of one
+// part, keyframe 0; a part no loop edge joins to the others stays where it is).
+void fixOldestOfEachComponent(PoseGraph* graph) {
+  std::map<KeyframeId, KeyframeId> parent;
+  for (const PoseGraphNode& node : graph->nodes) parent[node.id] = node.id;
+  const auto root = [&parent](KeyframeId id) {
+    while (parent[id] != id) id = parent[id] = parent[parent[id]];
+    return id;
+  };
+  for (const PoseGraphEdge& e : graph->edges) {
+    if (!parent.count(e.from) || !parent.count(e.to)) continue;
+    const KeyframeId a = root(e.from), b = root(e.to);
+    parent[std::max(a, b)] = std::min(a, b);
+  }
+  for (PoseGraphNode& node : graph->nodes) node.fixed = root(node.id) == node.id;
+}
+
 }  // namespace
 
 void LoopClosureOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -47,6 +65,10 @@ void LoopClosureOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "min_correction_m", &min_correction_m, 0.0, 100.0, "m",
           "a closure that moves no keyframe further than this...");
   r->bind(s, "min_correction_deg", &min_correction_deg, 0.0, 180.0, "deg", "...nor turns one further changes nothing");
+  r->bind(s, "join_max_speed_m_s", &join_max_speed_m_s, 0.0, 100.0, "m/s",
+          "a part joins another only where its first keyframe lies within this speed times the time "
+          "since that part's last keyframe before it (0: anywhere)...");
+  r->bind(s, "join_margin_m", &join_margin_m, 0.0, 1000.0, "m", "...plus this");
   r->bind(s, "features", &features, 10, 10000, "features", "ORB features per keyframe for place recognition, at most");
   place.bind(r, "place_recognition");
   graph.bind(r, "pose_graph");
@@ -81,7 +103,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
     PlaceExclusion exclusion;
     exclusion.newest = id - options_.min_keyframe_gap;
     exclusion.ids = keyframesSharingPoints(*map, *kf);
-    const PlaceMatch match = places_->recognise(features, exclusion, kf->T_w_c);
+    const PlaceMatch match = recognise(*map, *kf, features, exclusion, &result);
     result.tried = true;
     result.place = match.status;
     ++counters_.queries;
@@ -119,17 +141,87 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
       if (result.refused || !solved.ok()) {
         ++counters_.refused;
         result.refused = true;
+        result.joined_part = result.joined_to = -1;
       } else {
         loops_.clear();
         for (const PoseGraphEdge& e : graph.edges) {
           if (e.kind == PoseGraphEdgeKind::kLoop) loops_.push_back(e);
         }
         if (apply(map, solved, graph, changes, &result)) ++counters_.closed;
+        if (result.joined_part >= 0) joinParts(map, result.joined_part, result.joined_to, changes);
       }
     }
   }
   places_->add(id, map->keyframe(id)->T_w_c, std::move(features));
   return result;
+}
+
+// Place recognition within the keyframe's part first, with the odometry check; failing
+// that, in the other parts of the map, where odometry says nothing (a part's place relative
+// to the others is a guess: mapper.h, "Parts"), so the join is held to the speed the
+// vehicle can fly instead (partJoinWithinReach).
+PlaceMatch LoopCloser::recognise(const Map& map, const Keyframe& kf, const Features3d& features,
+                                 const PlaceExclusion& exclusion, LoopClosureResult* result) {
+  if (features.size() < 3) return places_->recognise(features, exclusion, kf.T_w_c);
+  std::vector<PlaceCandidate> same, other;
+  for (const PlaceCandidate& c : places_->query(features, exclusion)) {
+    const Keyframe* candidate = map.keyframe(c.keyframe);
+    if (candidate && candidate->part != kf.part) other.push_back(c);
+    else same.push_back(c);
+  }
+  PlaceMatch match = places_->verify(features, same, kf.T_w_c);
+  if (match.recognised() || other.empty()) return match;
+  // The newer part moves onto the older: through the query if it is the query's, else
+  // through the candidate. Each other part on its own (poses in different parts' frames
+  // cannot be compared), the oldest first.
+  std::map<KeyframeId, std::vector<PlaceCandidate>> by_part;
+  for (const PlaceCandidate& c : other) by_part[map.keyframe(c.keyframe)->part].push_back(c);
+  PlaceMatch across;
+  for (const auto& [part, candidates] : by_part) {
+    const KeyframeId newer = std::max(kf.part, part), older = std::min(kf.part, part);
+    const bool query_moves = kf.part == newer;
+    const auto plausible = [&map, &kf, query_moves, newer, older, this](KeyframeId, const SE3& T_w_q) {
+      const SE3 moved = query_moves ? T_w_q * kf.T_w_c.inverse() : kf.T_w_c * T_w_q.inverse();
+      return partJoinWithinReach(map, newer, older, moved);
+    };
+    across = places_->verify(features, candidates, std::nullopt, plausible);
+    if (across.recognised()) {
+      result->joined_part = newer;
+      result->joined_to = older;
+      return across;
+    }
+  }
+  const bool refused = across.status == PlaceStatus::kInconsistentWithOdometry || across.status == PlaceStatus::kAmbiguous;
+  return refused || match.status == PlaceStatus::kNoCandidate ? across : match;
+}
+
+// The newer part's first keyframe, moved by 'moved' into the frame of the part 'onto', must
+// lie within the distance the vehicle can have flown since that part's last keyframe before
+// it (join_max_speed_m_s, plus join_margin_m for the poses' own errors): the same bound as the
+// tracker's relocaliser, and the only one against a lookalike place in another part. A part
+// that started before 'onto' had a keyframe has no such bound: refused.
+bool LoopCloser::partJoinWithinReach(const Map& map, KeyframeId part, KeyframeId onto, const SE3& moved) const {
+  const Keyframe* first = nullptr;
+  const Keyframe* before = nullptr;  // the last keyframe of the part it joins before it started
+  for (const auto& [id, kf] : map.keyframes()) {
+    if (kf->part == part && !first) first = kf.get();
+    if (!first && kf->part == onto) before = kf.get();
+  }
+  if (!first || options_.join_max_speed_m_s <= 0.0) return first != nullptr;
+  if (!before) return false;  // started before that part: no bound to hold it to
+  const double dt_s = std::max(0.0, static_cast<double>(first->utime - before->utime) * 1e-6);
+  const double reach_m = options_.join_max_speed_m_s * dt_s + options_.join_margin_m;
+  return ((moved * first->T_w_c).translation() - before->T_w_c.translation()).norm() <= reach_m;
+}
+
+// After a join the two parts are one: the newer one's keyframes take the older one's name.
+void LoopCloser::joinParts(Map* map, KeyframeId newer, KeyframeId older, MapChanges* changes) {
+  for (const auto& [id, kf] : map->keyframes()) {
+    if (kf->part != newer) continue;
+    kf->part = older;
+    changes->keyframes.insert(id);  // the rename is published even where nothing moved
+  }
+  ++counters_.parts_joined;
 }
 
 void LoopCloser::onKeyframeRemoved(KeyframeId id) {
@@ -145,9 +237,10 @@ void LoopCloser::onKeyframeRemoved(KeyframeId id) {
 // for the drift a step may carry; the loop edges accepted before, and 'loop' last.
 PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) const {
   PoseGraph graph;
-  const Keyframe* previous = nullptr;
+  std::map<KeyframeId, const Keyframe*> last_in_part;  // odometry runs within a part
   for (const auto& [id, kf] : map.keyframes()) {
-    graph.nodes.push_back(PoseGraphNode{id, kf->T_w_c, previous == nullptr});
+    const Keyframe*& previous = last_in_part[kf->part];
+    graph.nodes.push_back(PoseGraphNode{id, kf->T_w_c, false});
     if (previous) {
       PoseGraphEdge edge;
       edge.from = previous->id;
@@ -166,6 +259,7 @@ PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) cons
     if (map.hasKeyframe(e.from) && map.hasKeyframe(e.to)) graph.edges.push_back(e);
   }
   graph.edges.push_back(loop);
+  fixOldestOfEachComponent(&graph);
   return graph;
 }
 

@@ -234,7 +234,9 @@ KeyframeCullResult cullRedundantKeyframes(Map* map, const std::vector<KeyframeId
   if (options.keyframe_redundant_observers < 1) return result;  // culling off for this mode
   for (KeyframeId id : candidates) {
     const Keyframe* kf = map->keyframe(id);
-    if (id != 0 && kf && redundant(*map, *kf, options) && !bridgesChain(*map, *kf, options)) {
+    // A part's first keyframe (keyframe 0 for the map's start) names its part and holds its
+    // gauge (mapper.h, "Parts").
+    if (id != 0 && kf && kf->part != id && redundant(*map, *kf, options) && !bridgesChain(*map, *kf, options)) {
       removeKeyframe(map, id, pending_2d_outliers, &result);
     }
   }
@@ -245,7 +247,7 @@ KeyframesKept keyframesKept(const Map& map, const CullOptions& options) {
   KeyframesKept kept;
   const std::set<KeyframeId> young = newestKeyframes(map, options.keyframe_cull_min_age);
   for (const auto& [id, kf] : map.keyframes()) {
-    if (id == 0) ++kept.gauge;
+    if (id == 0 || kf->part == id) ++kept.gauge;
     else if (young.count(id)) ++kept.young;
     else if (static_cast<int>(kf->measurements().size()) < options.keyframe_cull_min_points) ++kept.few_points;
     else if (!redundant(map, *kf, options)) ++kept.not_redundant;

@@ -71,6 +71,7 @@ class Mapper::Impl {
   const Map& map() const { return map_; }
   const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
   long keyframesCulled() const { return keyframes_culled_; }
+  MapParts parts() const;
   KeyframesKept keyframesKept() const { return rgbdslam::keyframesKept(map_, modeCullOptions()); }
   void removeKeyframes(const std::vector<KeyframeId>& ids);
 
@@ -88,6 +89,7 @@ class Mapper::Impl {
   }
   std::string checkKeyframe(const KeyframeData& data) const;
   void integrate(const KeyframeData& data, MapperResult* result);
+  KeyframeId partOf(const KeyframeData& data) const;
   void addPoint(const MapPoint& point);
   void addMeasurement(KeyframeId kf, Measurement m);
   KeyframeId epipolarPartner(const Keyframe& kf) const;
@@ -116,6 +118,7 @@ class Mapper::Impl {
   bool keyframe_cull_needed_ = false;  // a keyframe came since the last keyframe culling
   std::vector<KeyframeId> added_since_keyframe_cull_;
   long keyframes_culled_ = 0;
+  long parts_started_ = 0;  // keyframes that started a part (not keyframe 0's)
   int keyframes_since_global_ba_ = 0;
   MapChanges changes_;  // since the last takeChanges()
   bool changed_in_call_ = false;  // refine(): this call changed the map
@@ -163,7 +166,7 @@ void Mapper::Impl::load(const LoadedMap& loaded) {
   for (size_t i = 0; i < loaded.keyframes.size(); ++i) {
     map_.addKeyframe(loaded.buildKeyframe(i, options_.keyframe_build));
   }
-  for (const MapPointData& p : loaded.points) map_.addPoint(MapPoint(p));
+  for (const MapPointData& p : loaded.points) map_.addPoint(MapPoint(p));  // one part: files name none
   MapChanges none;  // places only: nothing is closed or moved
   for (const KeyframeData& kf : loaded.keyframes) loop_closer_.onKeyframe(&map_, kf.id, &none, /*close=*/false);
 }
@@ -174,11 +177,16 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
   KeyframeBuildOptions build = options_.keyframe_build;
   if (data.grey_lossy) build.corners = lossyCornerOptions(build.corners);
+  const KeyframeId part = partOf(data);
   Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, build));
+  kf->part = part;
+  if (part == kf->id && kf->id != 0) ++parts_started_;
   for (const MapPointData& p : data.new_points) addPoint(MapPoint(p));
   for (const Measurement& m : data.measurements) {
-    if (map_.point(m.point_id)) addMeasurement(kf->id, m);
-    else ++result->dropped_measurements;
+    const MapPoint* point = map_.point(m.point_id);
+    if (!point) ++result->dropped_measurements;
+    else if (map_.partOfPoint(*point) != part) ++result->cross_part_measurements;
+    else addMeasurement(kf->id, m);
   }
   // A provisional point whose source measurement was not sent gets it from its patch.
   for (const MapPointData& p : data.new_points) {
@@ -188,6 +196,27 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
     }
   }
   result->epipolar_points = addEpipolarPoints(*kf);
+}
+
+// The part a keyframe joins (mapper.h, "Parts"): a new one when it says so (the tracker
+// started it where it was lost), else the part whose points it measures most (ties: the
+// older part), else, measuring no known point, the newest keyframe's.
+KeyframeId Mapper::Impl::partOf(const KeyframeData& data) const {
+  if (map_.keyframes().empty()) return data.id;
+  if (data.new_part) return data.id;
+  std::map<KeyframeId, int> measured;
+  for (const Measurement& m : data.measurements) {
+    if (const MapPoint* point = map_.point(m.point_id)) {
+      const KeyframeId part = map_.partOfPoint(*point);
+      if (part >= 0) ++measured[part];
+    }
+  }
+  KeyframeId best = map_.keyframes().rbegin()->second->part;
+  int best_count = 0;
+  for (const auto& [part, count] : measured) {
+    if (count > best_count) best = part, best_count = count;
+  }
+  return best;
 }
 
 void Mapper::Impl::addPoint(const MapPoint& point) {
@@ -208,7 +237,7 @@ void Mapper::Impl::addMeasurement(KeyframeId kf, Measurement m) {
 // is within epipolar_partner_max_angle_deg, so that points have parallax to triangulate.
 KeyframeId Mapper::Impl::epipolarPartner(const Keyframe& kf) const {
   KeyframeId nearest = -1;
-  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, 2)) {
+  for (KeyframeId id : map_.nearestKeyframesInPart(kf.T_w_c, 2, kf.part)) {
     if (id != kf.id) {
       nearest = id;
       break;
@@ -222,7 +251,7 @@ KeyframeId Mapper::Impl::epipolarPartner(const Keyframe& kf) const {
   double best_distance =
       (map_.keyframe(nearest)->T_w_c.translation() - kf.T_w_c.translation()).norm();
   for (const auto& [id, other] : map_.keyframes()) {
-    if (id == kf.id) continue;
+    if (id == kf.id || other->part != kf.part) continue;
     const double distance = (other->T_w_c.translation() - kf.T_w_c.translation()).norm();
     if (distance <= best_distance || distance > max_distance) continue;
     if (axis.dot(other->T_w_c.rotationMatrix().col(2)) < min_cos) continue;
@@ -243,7 +272,7 @@ std::vector<KeyframeId> Mapper::Impl::epipolarPartners(const Keyframe& kf) const
   const double min_cos = std::cos(options_.epipolar_partners.max_angle_deg * M_PI / 180.0);
   const Vec3 axis = kf.T_w_c.rotationMatrix().col(2);
   const size_t wanted = static_cast<size_t>(options_.epipolar_partners.partners_mono);
-  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, map_.numKeyframes())) {
+  for (KeyframeId id : map_.nearestKeyframesInPart(kf.T_w_c, map_.numKeyframes(), kf.part)) {
     if (partners.size() >= wanted) break;
     if (id == kf.id || id == first) continue;
     if (axis.dot(map_.keyframe(id)->T_w_c.rotationMatrix().col(2)) < min_cos) continue;
@@ -286,7 +315,7 @@ int Mapper::Impl::addEpipolarPointsWith(const Keyframe& kf, const Keyframe& othe
 std::set<KeyframeId> Mapper::Impl::localWindow(const Keyframe& kf) const {
   std::set<KeyframeId> window{kf.id};
   const int neighbours = options_.ba_windows.local_ba_neighbours;
-  for (KeyframeId id : map_.nearestKeyframes(kf.T_w_c, neighbours + 1)) {
+  for (KeyframeId id : map_.nearestKeyframesInPart(kf.T_w_c, neighbours + 1, kf.part)) {
     if (window.size() > static_cast<size_t>(neighbours)) break;
     window.insert(id);
   }
@@ -337,7 +366,7 @@ bool Mapper::Impl::refindNewPoints(const std::atomic<bool>* interrupt) {
     const Keyframe* source = point ? map_.keyframe(point->source_keyframe) : nullptr;
     if (!source) continue;
     for (const auto& [kf_id, kf] : map_.keyframes()) {
-      if (kf->measurements().count(pid)) continue;
+      if (kf->part != source->part || kf->measurements().count(pid)) continue;
       auto m = findPointInKeyframe(*point, *source, *kf, camera_, options_.refind, options_.matching);
       if (!m) continue;
       if (const auto d = kf->depthAt(m->uv)) m->depth = *d;
@@ -432,6 +461,16 @@ bool Mapper::Impl::refine(const std::atomic<bool>* interrupt) {
   return changed_in_call_;
 }
 
+MapParts Mapper::Impl::parts() const {
+  MapParts parts;
+  parts.started = parts_started_;
+  parts.joined = loop_closer_.counters().parts_joined;
+  std::set<KeyframeId> names;
+  for (const auto& [id, kf] : map_.keyframes()) names.insert(kf->part);
+  parts.now = static_cast<int>(names.size());
+  return parts;
+}
+
 Mapper::Mapper(const PinholeCamera& camera, const MapperOptions& options, SlamMode mode)
     : impl_(std::make_unique<Impl>(camera, options, mode)) {}
 Mapper::~Mapper() = default;
@@ -444,6 +483,7 @@ MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
 const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
 long Mapper::keyframesCulled() const { return impl_->keyframesCulled(); }
+MapParts Mapper::parts() const { return impl_->parts(); }
 KeyframesKept Mapper::keyframesKept() const { return impl_->keyframesKept(); }
 void Mapper::removeKeyframes(const std::vector<KeyframeId>& ids) { impl_->removeKeyframes(ids); }
 

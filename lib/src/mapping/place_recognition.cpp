@@ -162,7 +162,10 @@ bool PlaceDatabase::withinDrift(const Entry& keyframe, const SE3& T_w_q_estimate
 }
 
 PlaceMatch PlaceDatabase::verify(const Features3d& features, const std::vector<PlaceCandidate>& candidates,
-                                 const std::optional<SE3>& T_w_q_estimate) const {
+                                 const std::optional<SE3>& T_w_q_estimate, const Plausible& plausible) const {
+  const auto consistent_with = [&](const Entry& keyframe, const SE3& T_w_q) {
+    return (!T_w_q_estimate || withinDrift(keyframe, *T_w_q_estimate, T_w_q)) && (!plausible || plausible(keyframe.id, T_w_q));
+  };
   PlaceMatch match;
   match.candidates = candidates;
   if (features.size() < 3) {
@@ -203,7 +206,7 @@ PlaceMatch PlaceDatabase::verify(const Features3d& features, const std::vector<P
     // Two consistent poses more than twice the ambiguity bound apart: whichever turns out
     // best, one of them disagrees with it (triangle inequality), so the verdict is
     // kAmbiguous already and the other candidates need no verification (~5 ms each).
-    if (T_w_q_estimate && !withinDrift(*keyframe, *T_w_q_estimate, pose->T_w_c)) continue;
+    if (!consistent_with(*keyframe, pose->T_w_c)) continue;
     const bool ambiguous = std::any_of(consistent_poses.begin(), consistent_poses.end(), [&](const SE3& other) {
       return posesDisagree(other, pose->T_w_c, 2.0 * options_.ambiguity_m, 2.0 * options_.ambiguity_deg);
     });
@@ -220,7 +223,7 @@ PlaceMatch PlaceDatabase::verify(const Features3d& features, const std::vector<P
   // Odometry: only the verified poses within the drift bound of the estimate stay.
   std::vector<PlaceVerification> consistent;
   for (size_t i = 0; i < match.verified.size(); ++i) {
-    if (!T_w_q_estimate || withinDrift(*keyframe_of[i], *T_w_q_estimate, match.verified[i].T_w_q)) {
+    if (consistent_with(*keyframe_of[i], match.verified[i].T_w_q)) {
       consistent.push_back(match.verified[i]);
     }
   }

@@ -1,6 +1,7 @@
 #include "rgbdslam/tracking/map_replica.h"
 
 #include <algorithm>
+#include <map>
 #include <utility>
 
 #include "rgbdslam/image/codec.h"
@@ -241,10 +242,22 @@ void MapReplica::removePoint(PointId id) {
 bool MapReplica::apply(const MapUpdate& update) {
   bool unknown = false;
   acked_below_ = std::max(acked_below_, update.acked_below);
+  std::map<KeyframeId, KeyframeId> renamed;  // parts the mapper joined to others
   for (const KeyframePose& pose : update.keyframes) {
     Keyframe* keyframe = map_.keyframe(pose.id);
-    if (keyframe) keyframe->T_w_c = pose.T_w_c;
-    else unknown = true;
+    if (!keyframe) {
+      unknown = true;
+      continue;
+    }
+    keyframe->T_w_c = pose.T_w_c;
+    // The keyframe that started a part, in another now: the loop closer joined the part to
+    // that one. The tracker's keyframes of it not yet in a map version follow.
+    if (pose.id == keyframe->part && pose.part != keyframe->part) renamed[keyframe->part] = pose.part;
+    keyframe->part = pose.part;
+  }
+  for (const auto& [id, keyframe] : map_.keyframes()) {
+    const auto it = renamed.find(keyframe->part);
+    if (it != renamed.end()) keyframe->part = it->second;
   }
   if (update.is_snapshot) {
     std::unordered_set<PointId> kept;

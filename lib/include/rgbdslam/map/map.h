@@ -38,6 +38,11 @@ struct Keyframe {
   std::vector<LevelCorners> corners;  // FAST corners per level
   SmallBlurryImage sbi;     // for relocalisation
   double median_depth = 2.0;  // median depth of the points it measures [m]
+  // The part of the map it belongs to (the mapper's; mapper.h, "Parts"): the id of the
+  // keyframe that started the part (0 for the map's start), which stays its name after that
+  // keyframe is culled. A part's keyframes and points are tied to the other parts' only by
+  // the loop closer, which merges two parts when it joins them.
+  KeyframeId part = 0;
   // The tracker's local map (tracking/map_replica.h): a keyframe away from the camera is
   // 'cold': no pyramid, its level-0 image kept as JPEG here, rebuilt when the camera comes
   // back (empty while the tracker's keyframe store holds it). The mapper's keyframes are
@@ -134,6 +139,10 @@ class Map {
   // direction (metres per radian, PTAM-like), nearest first.
   std::vector<KeyframeId> nearestKeyframes(const SE3& T_w_c, size_t n,
                                            double metres_per_radian = 0.5) const;
+  // The same among the keyframes of one part (Keyframe::part).
+  std::vector<KeyframeId> nearestKeyframesInPart(const SE3& T_w_c, size_t n, KeyframeId part) const;
+  // The part of a point: its source keyframe's (-1 when that keyframe is not in the map).
+  KeyframeId partOfPoint(const MapPoint& point) const;
   // The keyframes whose camera centre is within 'radius_m' of T_w_c's, in id order.
   std::vector<KeyframeId> keyframesWithin(const SE3& T_w_c, double radius_m) const;
 

@@ -48,7 +48,11 @@ class MapDiffer {
     KeyframeId source;   // source keyframe as last published
   };
   std::unordered_map<PointId, PublishedPoint> points_;
-  std::map<KeyframeId, SE3> keyframes_;       // pose as last published
+  struct PublishedKeyframe {
+    SE3 T_w_c;
+    KeyframeId part = 0;
+  };
+  std::map<KeyframeId, PublishedKeyframe> keyframes_;  // as last published
 };
 
 }  // namespace rgbdslam

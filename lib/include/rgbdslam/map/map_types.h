@@ -37,11 +37,15 @@ struct KeyframeData {
   std::vector<Measurement> measurements;
   std::vector<MapPointData> new_points;
   bool grey_lossy = false;  // 'grey' went through a lossy codec (JPEG on the link)
+  // The first keyframe of a new part of the map (mapper.h, "Parts"): made where the tracker
+  // was lost in unmapped space, at the pose it coasted to; it measures no earlier point.
+  bool new_part = false;
 };
 
 struct KeyframePose {
   KeyframeId id = -1;
   SE3 T_w_c;
+  KeyframeId part = 0;  // Keyframe::part (map updates carry it; the loop closer renames parts)
 };
 
 struct PointPosition {

@@ -2,9 +2,11 @@
 // Between the map and the BundleAdjuster: a BaProblem for a window of free keyframes (all
 // points they measure free; every other keyframe measuring those points fixed; keyframe 0
 // always fixed), and the results written back (poses, points, outlier flags).
-// Gauge: at least min_fixed_keyframes keyframes that take part are fixed (the oldest free
-// ones are fixed to get there); fix_initial_points holds the points whose source is keyframe
-// 0 fixed (2-D BA, where the cost does not see the scale).
+// Gauge: at least min_fixed_keyframes keyframes of each part of the map that takes part
+// (Keyframe::part; parts share no measurement, mapper.h) are fixed (its oldest free ones are
+// fixed to get there); fix_initial_points holds the points whose source is the keyframe that
+// started a part fixed, keyframe 0's in a map of one part (2-D BA, where the cost does not
+// see the scale).
 // Determinism: keyframes, points and observations are in id order.
 #include <set>
 #include <utility>

@@ -12,7 +12,9 @@
 //     loop_sigma_min_*) in a pose graph over all keyframes (pose_graph.h): odometry edges
 //     between consecutive keyframes from the current poses, with sigmas that grow with the
 //     step (odometry_sigma_*: what the drift between two keyframes may be), keyframe 0
-//     fixed, and the loop edges accepted before;
+//     fixed, and the loop edges accepted before (mapper.h, "Parts": odometry edges only
+//     within a part, the oldest keyframe of each part that no loop edge joins fixed; a place
+//     recognised in another part joins the two, within join_max_speed_m_s);
 //  3. loop edges that disagree with the solution are dropped and the graph solved again;
 //     if the new edge is among them the loop is refused (counted), the map stays as it was;
 //  4. otherwise, if some keyframe moves by more than min_correction_m / _deg, every
@@ -49,6 +51,13 @@ struct LoopClosureOptions {
   double loop_sigma_min_deg = 0.2;        // ...and rotation [deg]
   double min_correction_m = 0.005;        // a closure that moves no keyframe further [m]...
   double min_correction_deg = 0.2;        // ...nor turns one further [deg] changes nothing
+  // Parts of the map (mapper.h, "Parts"): a place recognised in another part joins the two
+  // (the newer part moves rigidly onto the older, through the loop edge) only if the newer
+  // part's first keyframe then lies within this speed times the time since the keyframe
+  // before it, plus the margin (as tracker.relocalise_max_speed_m_s bounds a relocalisation;
+  // 0: anywhere). Odometry cannot bound it: the part started where the tracker was lost.
+  double join_max_speed_m_s = 3.0;        // [m/s]
+  double join_margin_m = 1.0;             // [m]
   int features = 500;                     // ORB features per keyframe at most
   PlaceRecognitionOptions place;          // section "place_recognition"
   PoseGraphOptions graph = verifiedLoops();  // section "pose_graph"
@@ -78,6 +87,8 @@ struct LoopClosureResult {
   double correction_m = 0.0;  // the largest keyframe move [m]
   double correction_deg = 0.0;  // ...and turn [deg]
   double recognise_ms = 0.0, graph_ms = 0.0;
+  KeyframeId joined_part = -1;  // a part joined to another by this closure (mapper.h, "Parts")...
+  KeyframeId joined_to = -1;    // ...and the part it joined, whose name it takes
 };
 
 struct LoopClosureCounters {
@@ -86,6 +97,7 @@ struct LoopClosureCounters {
   // keyframe's pose than the drift since explains (a lookalike place), or two verified
   // places that disagree (PlaceStatus kInconsistentWithOdometry, kAmbiguous).
   long beyond_drift = 0, ambiguous = 0;
+  long parts_joined = 0;  // closures that joined two parts of the map
 };
 
 class LoopCloser {
@@ -105,6 +117,10 @@ class LoopCloser {
     SE3 T_w_k;
     Features3d features;
   };
+  PlaceMatch recognise(const Map& map, const Keyframe& kf, const Features3d& features,
+                       const PlaceExclusion& exclusion, LoopClosureResult* result);
+  bool partJoinWithinReach(const Map& map, KeyframeId part, KeyframeId onto, const SE3& moved) const;
+  void joinParts(Map* map, KeyframeId newer, KeyframeId older, MapChanges* changes);
   PoseGraph buildGraph(const Map& map, const PoseGraphEdge& loop) const;
   bool apply(Map* map, const PoseGraphResult& solved, const PoseGraph& graph, MapChanges* changes,
              LoopClosureResult* result) const;

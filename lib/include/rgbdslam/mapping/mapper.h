@@ -32,6 +32,17 @@
 // not see the scale, so keyframe 0's points (the map initialisation from measured depth)
 // are held fixed and keep it (fixing a second, tracked keyframe instead would pin its
 // tracking error into the whole map).
+// Parts: where the tracker was lost with nothing in the map to relocalise against, it starts
+// a new part of the map from one RGB-D frame, as at the start (tracker.h,
+// new_part_after_failures), at the pose it coasted to: a guess relative to the map before.
+// A part's keyframes and points are kept to themselves until the loop closer joins it to
+// another (loop_closer.h): a keyframe joins the part whose points it measures most (a new
+// part when KeyframeData::new_part says so), its measurements of other parts' points are
+// dropped (counted), and epipolar partners, local bundle adjustment's neighbours and
+// re-finding stay within its part; bundle adjustment fixes the oldest keyframe of every part
+// it holds (ba_problem.h). Why not one map tied by the coasted pose: after a second or more
+// lost, that pose is off by metres and degrees, and points made from it in the old map's
+// frame would tie wrong places together.
 // Point ids: the tracker's provisional points and the mapper's own, by point_ids.h.
 // Determinism: no randomness; everything iterates in id order, so equal inputs give equal
 // maps.
@@ -109,12 +120,19 @@ struct MapperResult {
   Status status = Status::kBadKeyframe;
   std::string error;
   int dropped_measurements = 0;  // measurements of points the map does not know
+  int cross_part_measurements = 0;  // of points of another part of the map: dropped ("Parts")
   int epipolar_points = 0;       // points added by epipolar search
   double integrate_ms = 0.0, local_ba_ms = 0.0;
   LoopClosureResult loop;        // the loop closer's verdict on this keyframe
 };
 
 const char* toString(MapperResult::Status status);
+
+struct MapParts {
+  long started = 0;  // keyframes that started a part (keyframe 0 not counted)
+  long joined = 0;   // parts the loop closer joined to another
+  int now = 0;       // parts in the map now (1: one connected map)
+};
 
 class Mapper {
  public:
@@ -127,6 +145,7 @@ class Mapper {
   const Map& map() const;
   const LoopClosureCounters& loopClosures() const;
   long keyframesCulled() const;  // redundant keyframes removed so far
+  MapParts parts() const;
   KeyframesKept keyframesKept() const;  // why the map's keyframes stay (map_maintenance.h)
   // Removes the keyframes as culling would, unjudged (a restart repeating its journal's culls).
   void removeKeyframes(const std::vector<KeyframeId>& ids);

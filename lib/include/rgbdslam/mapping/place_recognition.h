@@ -55,6 +55,7 @@
 // the early stops 54 / 72 ms at 100 / 1000 keyframes) 12.8 / 14.6 ms; copies at one pose
 // (all agree: the worst case now) 24.9 / 7.6 ms. Targets 20 / 200 ms: the worst case at
 // 100 keyframes (10 neighbouring places that all verify) is 25 % over.
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -166,10 +167,14 @@ class PlaceDatabase {
   // Keyframes by appearance, best first: at most options.candidates, each scoring at least
   // min_score_ratio of the best.
   std::vector<PlaceCandidate> query(const Features3d& features, const PlaceExclusion& exclusion) const;
+  // Whether a verified pose of the query (through the keyframe named) is possible at all, as
+  // the odometry check is (kInconsistentWithOdometry when none is): the loop closer's bound
+  // on joining parts of the map (loop_closer.h).
+  using Plausible = std::function<bool(KeyframeId keyframe, const SE3& T_w_q)>;
   // The geometric verification of 'candidates' (see above). T_w_q_estimate: the query's pose
   // as odometry has it, for the drift check; nullopt (relocalisation) skips that check.
   PlaceMatch verify(const Features3d& features, const std::vector<PlaceCandidate>& candidates,
-                    const std::optional<SE3>& T_w_q_estimate) const;
+                    const std::optional<SE3>& T_w_q_estimate, const Plausible& plausible = {}) const;
   // query() then verify().
   PlaceMatch recognise(const Features3d& features, const PlaceExclusion& exclusion,
                        const std::optional<SE3>& T_w_q_estimate) const;
