@@ -221,16 +221,23 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     inconsistent_frames_ += last.inconsistent;
     max_correction_m_ = std::max(max_correction_m_, last.correction_m);
     depth_aided_frames_ += last.depth_aided;
+    new_parts_ += last.new_part;
     if (hasPose(last.status) && first_pose_ms_ < 0) {
       first_pose_frame_ = frames;
       first_pose_ms_ = msSince(run_start);
     }
     if (hasPose(last.status)) {
       trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
+      map_trajectory_.push_back({last.pose.utime * 1e-6, last.map_T_w_c});
+      part_trajectories_[last.part].push_back({last.pose.utime * 1e-6, last.map_T_w_c});
       pose_states_.push_back(last.pose.state);
     }
     if (const std::string event = loss_.update(last); !event.empty()) {
       std::cerr << "\nrgbd-slam: " << event << "\n";
+    }
+    if (slam_->tracker().rejoins() > rejoins_) {
+      rejoins_ = slam_->tracker().rejoins();
+      std::cerr << "\nrgbd-slam: frame " << last.pose.seq << ": back in a part of the map it had left\n";
     }
     showProgress(last, false);
   }
@@ -285,8 +292,10 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   }
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
+  std::printf("new_parts %ld\nparts_rejoined %ld\n", new_parts_, slam_->tracker().rejoins());
   std::printf("map_correction_max_m %.4f\n", max_correction_m_);
   printLoopClosures(slam_->mapper().loopClosures());  // the mapper has finished
+  printMapParts(slam_->mapper().parts());
   std::printf("keyframes_culled %ld\nkeyframes_in_map %zu\n", slam_->mapper().keyframesCulled(),
               slam_->mapper().map().numKeyframes());
   printKeyframesKept(slam_->mapper().keyframesKept());
@@ -307,6 +316,21 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     return;
   }
   std::printf("%s", toKeyValueText(*result).c_str());
+  // The map pose as it was at each frame (a correction taken in at once, tracker.h's
+  // map_T_w_c): what the published pose converges to.
+  if (const auto map_result = evaluateTrajectory(*groundtruth_, map_trajectory_, eval)) {
+    std::printf("ate_map_pose_rmse_m %.6f\n", map_result->ate_m.rmse);
+  }
+  // Each part of the map on its own (map poses of the frames tracked in it, each part aligned
+  // alone): how right the poses are where they are, whatever a part's guessed start.
+  if (part_trajectories_.size() > 1) {
+    for (const auto& [part, poses] : part_trajectories_) {
+      EvalOptions alone;
+      const auto part_result = evaluateTrajectory(*groundtruth_, poses, alone);
+      std::printf("part_%ld_poses %zu\npart_%ld_ate_rmse_m %s\n", static_cast<long>(part), poses.size(),
+                  static_cast<long>(part), part_result ? std::to_string(part_result->ate_m.rmse).c_str() : "unknown");
+    }
+  }
   // The jumps a flight controller would have followed: reported as tracking (good).
   long jumps_tracking = 0;
   for (size_t k : result->jump_pairs) {

@@ -68,6 +68,10 @@ class BatchRunner {
   std::map<TrackingState, long> state_frames_;  // frames per tracking state
   long inconsistent_frames_ = 0;  // frames whose first pose the depth image contradicted
   long depth_aided_frames_ = 0;   // frames whose pose depth held with too few points
+  long new_parts_ = 0;            // frames that started a new part of the map (tracker.h)
+  long rejoins_ = 0;              // ...and times the tracker went back to a part it had left
+  Trajectory map_trajectory_;     // each posed frame's map pose (TrackResult::map_T_w_c)
+  std::map<KeyframeId, Trajectory> part_trajectories_;  // map poses by the part tracked in
   double max_correction_m_ = 0.0;  // largest map correction not yet in the published pose [m]
   long bad_frames_ = 0;
   // Map files (printed only when --load-map or --save-map is given).

@@ -222,6 +222,7 @@ void TrackerNode::trackFrame(const Received& received) {
   if (result.status != TrackResult::Status::kBadFrame) ++state_frames_[static_cast<size_t>(result.pose.state)];
   counters_.inconsistent += result.inconsistent;
   counters_.depth_aided += result.depth_aided;
+  counters_.new_parts += result.new_part;
   state_ = result.pose.state;
   if (const std::string event = loss_.update(result); !event.empty()) {
     std::cerr << "rgbd-tracker: " << event << "\n";
@@ -270,7 +271,8 @@ void TrackerNode::collectRelocalisation(bool wait) {
   done.get();  // the job's exception, if any, is this thread's now
   track_ms_.add(relocalised_.track_ms);
   relocalise_ms_.add(relocalised_.track_ms);
-  if (relocalised_.new_keyframe) sendKeyframe(std::move(*relocalised_.new_keyframe));
+  if (relocalised_.new_keyframe) sendKeyframe(std::move(*relocalised_.new_keyframe));  // a new part's
+  counters_.new_parts += relocalised_.new_part;
   if (relocalised_keyframe_) sendKeyframe(std::move(*relocalised_keyframe_));
   if (relocalised_.status == TrackResult::Status::kRelocalised) {
     ++relocalisations_recovered_;
@@ -279,6 +281,11 @@ void TrackerNode::collectRelocalisation(bool wait) {
     }
   } else {
     tracker_.countPassedFrames(frames_while_relocalising_);
+    if (relocalised_.new_part) {
+      if (const std::string event = loss_.update(relocalised_); !event.empty()) {
+        std::cerr << "rgbd-tracker: " << event << " (its pose not published: the next frame's is)\n";
+      }
+    }
   }
   relocalised_ = TrackResult{};
   relocalised_keyframe_.reset();
@@ -475,6 +482,7 @@ void TrackerNode::publishStatus() {
                      {"frames_relocalised", state_frames_[static_cast<size_t>(TrackingState::kRelocalised)]},
                      {"frames_inconsistent", c.inconsistent},
                      {"frames_depth_aided", c.depth_aided},
+                     {"new_parts", c.new_parts},
                      {"lost_episodes", loss_.episodes()},
                      {"relocalisations", loss_.relocalisations()},
                      {"relocalisations_off_frame_path", relocalisations_started_},
@@ -532,6 +540,7 @@ void TrackerNode::printSummary() const {
               relocalise_ms_.quantile(0.99), relocalise_ms_.quantile(1.0));
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
+  std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
     std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,
                 static_cast<long>(store->errors()));

@@ -181,6 +181,7 @@ class TrackerNode {
   struct Counters {
     long frames = 0, frames_skipped = 0, frames_passed = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
          bad_map_messages = 0, keyframes = 0, keyframe_sends = 0, inconsistent = 0, depth_aided = 0,
+         new_parts = 0,  // frames that started a new part of the map (tracker.h)
          maps_received = 0, maps_applied = 0, maps_stale = 0, maps_foreign = 0,
          maps_missing_delta = 0, maps_unknown_keyframe = 0, maps_implausible = 0, keyframe_bytes = 0,
          keyframes_coarser = 0,     // sent below the best rung of the ladder

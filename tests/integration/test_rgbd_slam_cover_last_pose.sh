@@ -15,7 +15,11 @@ MAX_ERROR_M=0.2
 
 SPEC=flight,frames=720,cover=640-654
 KEYS="poses|relocalisations|ate_rmse_m|ate_max_m"
-PINNED=(--set tracker.motion_prior=false --set tracker.retry_with_coarse=false --set tracker.retry_without_sbi=false)
+# Without new parts of the map (tracker.new_part_after_failures): this test is about the
+# relocaliser's bar, and a new part, started 60 failed attempts after the cover at the coasted
+# pose, is a guess by design (2.67 m off here; test_suite_new_part.sh tests those).
+PINNED=(--set tracker.motion_prior=false --set tracker.retry_with_coarse=false --set tracker.retry_without_sbi=false
+        --set tracker.new_part_after_failures=0)
 run_slam bar "$SPEC" "$KEYS" "${PINNED[@]}"
 [ "$(summary_value bar poses)" -ge 630 ] || fail "only $(summary_value bar poses) frames posed, 640 before the cover"
 awk -v a="$(summary_value bar ate_max_m)" -v b="$MAX_ERROR_M" 'BEGIN { exit !(a <= b) }' \

@@ -37,6 +37,14 @@ TEST(LossReport, OneLinePerTransition) {
   EXPECT_EQ(report.relocalisations(), 1);
   EXPECT_TRUE(report.lost());
   EXPECT_EQ(report.lostSinceSeq(), 9);
+  EXPECT_EQ(report.update(result(S::kLost, 10)), "");
+  TrackResult part = result(S::kTracked, 12);  // lost where nothing relocalises: a new part
+  part.new_part = true;
+  const std::string started = report.update(part);
+  EXPECT_NE(started.find("frame 12: a new part of the map started after 2 lost frames (lost at frame 9"), std::string::npos)
+      << started;
+  EXPECT_FALSE(report.lost());
+  EXPECT_EQ(report.update(result(S::kTracked, 13)), "");
 }
 
 }  // namespace

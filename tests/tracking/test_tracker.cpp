@@ -49,6 +49,15 @@ const RgbdFrame& roomFrame(size_t i) {
   return frames[i];
 }
 
+// The room's frame i as a covered camera sees it: black, no depth (new buffers: the room's
+// frames are shared).
+RgbdFrame coveredFrame(size_t i) {
+  RgbdFrame black = roomFrame(i);
+  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
+  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  return black;
+}
+
 double positionError(const SE3& T_w_c_est, size_t frame) {
   // Keyframe 0 is the world: compare in the first camera's frame.
   const SE3 T_c0_c = room().groundTruthPose(0).inverse() * room().groundTruthPose(frame);
@@ -263,9 +272,7 @@ TEST(Tracker, APoseTheDepthImageContradictsIsLostWithTheReason) {
 TEST(Tracker, RelocalisesAfterAJumpWhileLost) {
   Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
   ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
-  RgbdFrame black = roomFrame(151);
-  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));  // new buffers:
-  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));   // frames are shared
+  const RgbdFrame black = coveredFrame(151);
   EXPECT_EQ(tracker.track(black).status, Status::kLost);
   bool recovered = false;
   for (size_t i = 250; i < 255 && !recovered; ++i) {
@@ -288,9 +295,7 @@ TEST(Tracker, RelocalisesAfterAJumpWhileLost) {
 TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
   Tracker tracker(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
   ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
-  RgbdFrame black = roomFrame(151);
-  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
-  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  const RgbdFrame black = coveredFrame(151);
   for (int k = 0; k < 30; ++k) {  // one second covered
     const TrackResult result = tracker.track(black);
     EXPECT_EQ(result.status, Status::kLost);
@@ -307,6 +312,111 @@ TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
   EXPECT_TRUE(recovered);
 }
 
+// A camera carried from the mapped room into a corridor never mapped: relocalisation cannot
+// find it. After new_part_after_failures failed attempts a frame with depth starts a new
+// part of the map (its keyframe says so and measures only its own points), published dodgy
+// where the camera coasted to, and the corridor is tracked on from there, right relative to
+// that start. With the option at 0 the camera stays lost.
+TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
+  const SyntheticScene corridor(*parseSyntheticSpec("corridor,frames=60"));
+  for (const int after : {5, 0}) {
+    TrackerOptions options;
+    options.new_part_after_failures = after;
+    Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
+    const TrackResult last_room = feed(&tracker, 0, 150);
+    ASSERT_EQ(last_room.status, Status::kTracked);
+    const KeyframeId next_id = tracker.map().keyframes().rbegin()->first + 1;
+    std::optional<size_t> started;
+    SE3 start_pose;
+    int lost = 0, tracked_after = 0;
+    for (size_t i = 0; i < corridor.numFrames(); ++i) {
+      RgbdFrame frame = corridor.render(i);
+      frame.utime = roomFrame(150).utime + static_cast<int64_t>(i + 1) * 33333;
+      TrackResult result = tracker.track(frame);
+      if (result.new_part) {
+        ASSERT_FALSE(started) << "a second new part at corridor frame " << i;
+        started = i;
+        start_pose = result.pose.T_w_c;
+        EXPECT_EQ(result.status, Status::kTracked);
+        EXPECT_EQ(result.pose.state, TrackingState::kDodgy);
+        ASSERT_TRUE(result.new_keyframe);
+        EXPECT_TRUE(result.new_keyframe->new_part);
+        EXPECT_EQ(result.new_keyframe->id, next_id);
+        for (const Measurement& m : result.new_keyframe->measurements) {
+          EXPECT_TRUE(isProvisionalPointOf(m.point_id, next_id)) << "point " << m.point_id;
+        }
+        EXPECT_EQ(tracker.map().keyframe(next_id)->part, next_id);
+        // Where it coasted to: near the last room pose (the room's camera is slow).
+        EXPECT_LT((start_pose.translation() - last_room.pose.T_w_c.translation()).norm(), 0.5);
+      } else if (result.status == Status::kLost) {
+        ++lost;
+        EXPECT_FALSE(started) << "lost again at corridor frame " << i;
+      } else if (started) {
+        ASSERT_EQ(result.status, Status::kTracked) << "corridor frame " << i;
+        ++tracked_after;
+        const SE3 estimated = start_pose.inverse() * result.pose.T_w_c;
+        const SE3 actual = corridor.groundTruthPose(*started).inverse() * corridor.groundTruthPose(i);
+        EXPECT_LT((estimated.translation() - actual.translation()).norm(), 0.02) << "corridor frame " << i;
+      }
+    }
+    if (after == 0) {
+      EXPECT_FALSE(started);
+      EXPECT_EQ(lost, static_cast<int>(corridor.numFrames()));
+    } else {
+      ASSERT_TRUE(started);
+      EXPECT_LE(*started, 10u) << "the first corridor frame is lost, then " << after << " relocalisations fail";
+      EXPECT_EQ(tracked_after, static_cast<int>(corridor.numFrames() - *started - 1));
+      std::printf("new part at corridor frame %zu, %d frames tracked after it\n", *started, tracked_after);
+    }
+  }
+}
+
+// A new part started where the camera in fact still is in the mapped room (a frame lost, then
+// frames stamped right after it that put the view out of 3 m/s's reach, so relocalisation
+// refuses them),
+// at the wrong, coasted pose. Tracked in the new part with their own stamps, the frames are
+// tried against the old part every rejoin_every_frames, and the tracker goes back there:
+// its pose then right in the room's frame, and the published pose without a jump.
+TEST(Tracker, GoesBackIntoThePartItLeftWhenItSeesItAgain) {
+  for (const int every : {2, 0}) {
+    TrackerOptions options;
+    options.new_part_after_failures = 3;
+    options.rejoin_every_frames = every;
+    options.relocalise_shortlist = 4;  // the vocabulary (the old part's bags) from the start
+    Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
+    ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
+    const RgbdFrame black = coveredFrame(151);
+    ASSERT_EQ(tracker.track(black).status, Status::kLost);
+    std::optional<size_t> started, back;
+    TrackResult last;
+    for (size_t i = 285; i < 300; ++i) {  // over 1 m from frame 150's pose
+      RgbdFrame frame = roomFrame(i);
+      if (!started) frame.utime = roomFrame(151).utime + static_cast<int64_t>(i - 284);
+      const long rejoins = tracker.rejoins();
+      TrackResult result = tracker.track(frame);
+      if (result.new_part) started = i;
+      if (tracker.rejoins() > rejoins && !back) back = i;
+      if (back && i > *back) {
+        ASSERT_EQ(result.status, Status::kTracked) << "frame " << i;
+        EXPECT_LT(positionError(result.map_T_w_c, i), 0.05) << "frame " << i << ", back in the room's part";
+        EXPECT_LT((result.pose.T_w_c.translation() - last.pose.T_w_c.translation()).norm(), 0.05)
+            << "frame " << i << ": the published pose jumped";
+      }
+      last = result;
+    }
+    ASSERT_TRUE(started) << "no new part (rejoin every " << every << ")";
+    if (every == 0) {
+      EXPECT_GT(positionError(last.map_T_w_c, 299), 0.1) << "the new part's frame is the coasted guess";
+      EXPECT_FALSE(back);
+      EXPECT_EQ(tracker.rejoins(), 0);
+    } else {
+      ASSERT_TRUE(back) << "never back in the room's part";
+      EXPECT_EQ(tracker.rejoins(), 1);
+      std::printf("new part at frame %zu, back in the room's part at frame %zu\n", *started, *back);
+    }
+  }
+}
+
 // While lost, a frame passed (a newer one waits in a real-time caller) is reported lost
 // at once, without a relocalisation: two trackers lose the room alike; the frame the control
 // relocalises from stays lost when the other passes it, and the other relocalises from the
@@ -319,9 +429,7 @@ TEST(Tracker, PassesALostFrameWithoutRelocalisingIt) {
   EXPECT_FALSE(passing.lost());
   EXPECT_EQ(passing.passLost(roomFrame(151)).status, Status::kTracked) << "not lost: tracked";
   ASSERT_EQ(control.track(roomFrame(151)).status, Status::kTracked);
-  RgbdFrame black = roomFrame(152);
-  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
-  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  const RgbdFrame black = coveredFrame(152);
   ASSERT_EQ(passing.track(black).status, Status::kLost);
   ASSERT_EQ(control.track(black).status, Status::kLost);
   ASSERT_TRUE(passing.lost());
@@ -360,9 +468,7 @@ TEST(Tracker, CountingPassedFramesIsPassingThem) {
   Tracker uncounted(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
   for (Tracker* t : {&passing, &counting, &uncounted}) ASSERT_EQ(feed(t, 0, 151).status, Status::kTracked);
   counting.countPassedFrames(3);  // not lost: no effect
-  RgbdFrame black = roomFrame(152);
-  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
-  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  const RgbdFrame black = coveredFrame(152);
   for (Tracker* t : {&passing, &counting, &uncounted}) ASSERT_EQ(t->track(black).status, Status::kLost);
   const size_t passed_frames = 25;
   for (size_t i = 153; i < 153 + passed_frames; ++i) ASSERT_EQ(passing.passLost(roomFrame(i)).status, Status::kLost);
@@ -405,9 +511,7 @@ TEST(Tracker, RelocalisesOnlyWhereTheVehicleCouldHaveFlown) {
     options.relocalise_max_speed_m_s = c.max_speed_m_s;
     Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
     ASSERT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
-    RgbdFrame black = roomFrame(151);
-    black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
-    black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+    const RgbdFrame black = coveredFrame(151);
     ASSERT_EQ(tracker.track(black).status, Status::kLost);
     std::optional<size_t> relocalised_at;
     for (size_t i = 290; i < 300 && !relocalised_at; ++i) {
@@ -431,9 +535,7 @@ TEST(Tracker, RelocalisesOnlyWhereTheVehicleCouldHaveFlown) {
 TrackResult trackHalfHiddenViewAfterALoss(const TrackerOptions& options) {
   Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
   EXPECT_EQ(feed(&tracker, 0, 150).status, Status::kTracked);
-  RgbdFrame black = roomFrame(151);
-  black.colour = cv::Mat(black.colour.size(), CV_8UC3, cv::Scalar::all(0));
-  black.depth = cv::Mat(black.depth.size(), CV_16UC1, cv::Scalar::all(0));
+  const RgbdFrame black = coveredFrame(151);
   EXPECT_EQ(tracker.track(black).status, Status::kLost);
   RgbdFrame hidden = roomFrame(152);
   hidden.colour = hidden.colour.clone();  // the scene's frames may share their buffers

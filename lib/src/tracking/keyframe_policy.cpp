@@ -55,6 +55,7 @@ bool shouldAddKeyframe(const Map& map, const KeyframePolicyInput& input,
   if (!(input.median_depth_m > 0.0)) return false;
   const double max_distance = options.distance_ratio * input.median_depth_m;
   for (const auto& [id, keyframe] : map.keyframes()) {
+    if (keyframe->part != input.part) continue;
     const double distance = (keyframe->T_w_c.translation() - input.T_w_c.translation()).norm();
     if (distance <= max_distance && rotationAngleDeg(keyframe->T_w_c, input.T_w_c) <= options.angle_deg) {
       return false;  // this keyframe already covers the view

@@ -192,6 +192,7 @@ class Tracker::Impl {
     if (late) result.new_keyframe = std::move(late);  // trackFrame makes one only when it initialises
     publish(&result, frame.utime);
     result.keyframe_due = pending_keyframe_.has_value();
+    result.part = part_;
     stamp(&result, frame, start);
     return result;
   }
@@ -233,8 +234,13 @@ class Tracker::Impl {
       updateLocalMap(*pending_local_map_, options_.local_map.changes_per_frame);
       pending_local_map_.reset();
     }
+    if (rejoin_frame_) {
+      tryRejoin(*rejoin_frame_);
+      rejoin_frame_.reset();
+    }
     return data;
   }
+  long rejoins() const { return rejoins_; }
 
   bool applyMap(const MapUpdate& update) {
     reanchorBeforeCull(update.removed_keyframes);
@@ -248,7 +254,17 @@ class Tracker::Impl {
         if (id >= 0 && id <= INT_MAX) bow_index_.remove(static_cast<int>(id));
       }
     }
-    followMapCorrection();
+    // The loop closer joined the camera's part to another: that one's name is ours now.
+    const KeyframeId part_before = part_;
+    if (const Keyframe* first = replica_.map().keyframe(part_)) enterPart(first->part);
+    // (Its first keyframe culled, and the part renamed: the newest keyframe's part is ours.)
+    const auto& keyframes = replica_.map().keyframes();
+    if (!keyframes.empty() && std::none_of(keyframes.begin(), keyframes.end(), [this](const auto& entry) {
+          return entry.second->part == part_;
+        })) {
+      enterPart(keyframes.rbegin()->second->part);
+    }
+    followMapCorrection(/*joined=*/part_ != part_before);
     return known;
   }
   const Map& map() const { return replica_.map(); }
@@ -264,6 +280,11 @@ class Tracker::Impl {
     motion_prior_.clear();
     lost_velocity_.setZero();
     lost_frames_ = 0;
+    failed_relocalisations_ = 0;
+    part_ = projection_part_ = 0;
+    part_left_.reset();
+    frames_since_rejoin_ = 0;
+    rejoin_frame_.reset();
     last_pose_utime_.reset();
     frames_since_keyframe_ = 0;
     uncertain_frames_ = 0;
@@ -295,6 +316,20 @@ class Tracker::Impl {
   }
   void prepareFrame(const RgbdFrame& frame);
   TrackResult initialise(const RgbdFrame& frame);
+  bool addFirstKeyframe(const RgbdFrame& frame, KeyframeId id, const SE3& T_w_c, TrackResult* result);
+  std::optional<TrackResult> startPart(const RgbdFrame& frame, std::string* why_not);
+  // While in a part started where the camera was lost, every rejoin_every_frames frames
+  // finishFrame() relocalises the frame against the other parts' keyframes: a camera back in
+  // mapped space goes on in that part (its pose moved there, the published one taking the
+  // difference in at correction_rate_*) instead of mapping it again.
+  void tryRejoin(const RgbdFrame& frame);
+  // The tracker is in 'part' now; back in the part it had left (or in the map's first part),
+  // there is nothing to rejoin.
+  void enterPart(KeyframeId part) {
+    part_ = part;
+    const bool first_part = !replica_.map().keyframes().empty() && replica_.map().keyframes().begin()->second->part == part;
+    if (first_part || (part_left_ && part_left_->part == part)) part_left_.reset();
+  }
   TrackResult relocalise(const RgbdFrame& frame);
   void updateLocalMap(const SE3& T_w_c, int max_thaws);
   void storeColdExtras();
@@ -324,7 +359,8 @@ class Tracker::Impl {
   bool isLost(const Attempt& attempt) const;
   bool coarseWanted(const SE3& T_c_w_start);
   bool poseFixed(const PoseUncertainty& uncertainty) const;
-  bool constrainsPose(const std::vector<NewPoint>& points) const;
+  // Whether keyframe 'id''s points from depth fix its pose T_c_w as tracking requires of a frame.
+  bool constrainsPose(const std::vector<NewPoint>& points, KeyframeId id, const SE3& T_c_w) const;
   bool isReliable(const MapPoint& point) const {
     return point.times_projected < options_.quality.unreliable_after_searches ||
            point.times_found >= options_.quality.unreliable_found_ratio * point.times_projected;
@@ -366,7 +402,10 @@ class Tracker::Impl {
   void rememberKeyframe(const Keyframe& keyframe);
   // Map corrections: after a map update, the tracker's pose moves as the keyframe nearest
   // it moved, and the published offset takes up the difference (TrackerOptions::correction_*).
-  void followMapCorrection();
+  // joined: the camera's part was joined to another (mapper.h, "Parts"): the correction is
+  // what the part's start was guessed wrong by, metres, beyond the fine stage's reach from
+  // the old pose, so the tracker's own pose follows at once, whatever follow_map_corrections.
+  void followMapCorrection(bool joined);
   void reanchorBeforeCull(const std::vector<KeyframeId>& removed);
   // The anchor: the source keyframe of most of the points found (the pose rests on them),
   // else the keyframe nearest the pose.
@@ -447,6 +486,23 @@ class Tracker::Impl {
   // does not stop when its tracker loses it: relocalise() tries where it coasted to).
   Vec6 lost_velocity_ = Vec6::Zero();
   int lost_frames_ = 0;
+  int failed_relocalisations_ = 0;  // in a row, since the loss (new_part_after_failures)
+  // The part of the map the camera is in (Keyframe::part; mapper.h, "Parts"): only its
+  // points are tracked, since another part's lie where a guess put them. A relocalisation
+  // tries each candidate keyframe's part (projection_part_).
+  KeyframeId part_ = 0;
+  KeyframeId projection_part_ = 0;
+  // Where and when the camera was lost in the part it left for a new one: the bound on where
+  // a return into that part may put it (tryRejoin).
+  struct PartLeft {
+    SE3 T_w_c;  // the last pose there, in that part's frame
+    int64_t utime = 0;
+    KeyframeId part = 0;
+  };
+  std::optional<PartLeft> part_left_;
+  int frames_since_rejoin_ = 0;
+  std::optional<RgbdFrame> rejoin_frame_;  // the frame finishFrame() tries (its depth a copy)
+  long rejoins_ = 0;
   // The time of the frame T_c_w_ was accepted on (none: a loaded map's start, where the
   // camera may be anywhere in it).
   std::optional<int64_t> last_pose_utime_;
@@ -578,6 +634,7 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   // was the same without it. Open: the coarse stage's pose is not vouched for; the hidden
   // set could be decided once at the start pose, docs/open_work.md, session 27.)
   drop_hidden_ = state_ != TrackingState::kLost && depth_agreeing_found_ >= options_.occlusion.min_agreeing;
+  projection_part_ = part_;
   if (replica_.map().numKeyframes() == 0) tracked = initialise(frame);
   else if (state_ == TrackingState::kLost) tracked = relocalise(frame);
   else {
@@ -590,6 +647,15 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   tracked.inconsistent = frame_inconsistent_;
   if (tracked.status == TrackResult::Status::kTracked || tracked.status == TrackResult::Status::kRelocalised) {
     pending_local_map_ = tracked.pose.T_w_c;  // finishFrame
+    if (part_left_ && !tracked.new_part && options_.rejoin_every_frames > 0 &&
+        ++frames_since_rejoin_ >= options_.rejoin_every_frames && !frame.depth.empty()) {
+      frames_since_rejoin_ = 0;
+      rejoin_frame_ = RgbdFrame{};
+      rejoin_frame_->depth = frame.depth.clone();
+      rejoin_frame_->depth_scale = frame.depth_scale;
+      rejoin_frame_->utime = frame.utime;
+      rejoin_frame_->seq = frame.seq;
+    }
   }
   return tracked;
 }
@@ -608,7 +674,7 @@ void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
   std::sort(in_view.begin(), in_view.end());
   std::vector<KeyframeId> wanted;
   for (const auto& [minus_points, id] : in_view) wanted.push_back(id);
-  for (KeyframeId id : replica_.map().nearestKeyframes(T_w_c, static_cast<size_t>(o.keyframes))) {
+  for (KeyframeId id : replica_.map().nearestKeyframesInPart(T_w_c, static_cast<size_t>(o.keyframes), projection_part_)) {
     if (static_cast<size_t>(id) >= points_in_view_.size() || points_in_view_[id] == 0) wanted.push_back(id);
   }
   // At most the window: the sources of the points in view and the nearest keyframes together
@@ -653,58 +719,176 @@ void Tracker::Impl::prepareFrame(const RgbdFrame& frame) {
 TrackResult Tracker::Impl::initialise(const RgbdFrame& frame) {
   TrackResult result;
   result.pose.state = TrackingState::kInitialising;
-  if (frame.depth.empty() || frame.depth.size() != frame.colour.size()) {
+  if (!addFirstKeyframe(frame, 0, SE3(), &result)) {
     result.status = TrackResult::Status::kNotInitialised;
-    result.error = "no depth to initialise";
     return result;
+  }
+  result.status = TrackStatus::kInitialised;
+  return result;
+}
+
+// A map's first keyframe (keyframe 0 at the world's origin) or a new part's (startPart):
+// made from the frame's points from depth alone, which must be enough and fix the pose as
+// well as tracking requires of a frame; the tracker then tracks from it. False, with
+// result->error saying why, when the frame cannot start one.
+bool Tracker::Impl::addFirstKeyframe(const RgbdFrame& frame, KeyframeId id, const SE3& T_w_c, TrackResult* result) {
+  if (frame.depth.empty() || frame.depth.size() != frame.colour.size()) {
+    result->error = "no depth to initialise";
+    return false;
   }
   KeyframeData data;
   data.utime = frame.utime;
   data.map_id = map_id_;
-  data.id = 0;
+  data.id = id;
+  data.T_w_c = T_w_c;
   data.grey = grey_.clone();
   data.depth = frame.depth.clone();
   data.depth_scale = frame.depth_scale;
+  data.new_part = id != 0;
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
+  keyframe->part = id;  // keyframe 0's is 0
   const std::vector<NewPoint> points =
-      createPointsFromDepth(*keyframe, camera_, options_.depth_points, provisionalPointId(0, 0));
+      createPointsFromDepth(*keyframe, camera_, options_.depth_points, provisionalPointId(id, 0));
   if (static_cast<int>(points.size()) < options_.init_min_points) {
-    result.status = TrackResult::Status::kNotInitialised;
-    result.error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
-                   std::to_string(options_.init_min_points) + " needed)";
-    return result;
+    result->error = "no depth to initialise (" + std::to_string(points.size()) + " points, " +
+                    std::to_string(options_.init_min_points) + " needed)";
+    return false;
   }
-  // The points must fix the first pose as well as tracking requires of a frame.
-  if (!constrainsPose(points)) {
-    result.status = TrackResult::Status::kNotInitialised;
-    result.error = "no depth to initialise (" + std::to_string(points.size()) +
-                   " points do not fix the pose)";
-    return result;
+  if (!constrainsPose(points, id, T_w_c.inverse())) {
+    result->error = "no depth to initialise (" + std::to_string(points.size()) + " points do not fix the pose)";
+    return false;
   }
   rememberKeyframe(*keyframe);
   keyframe->releaseMappingData();
   replica_.addKeyframe(std::move(keyframe));
   for (const NewPoint& np : points) {
-    if (!isProvisionalPointOf(np.point.id, 0)) break;
+    if (!isProvisionalPointOf(np.point.id, id)) break;
     replica_.addProvisionalPoint(np);
     data.measurements.push_back(np.measurement);
     data.new_points.push_back(np.point.data());
   }
-  next_keyframe_id_ = 1;
+  next_keyframe_id_ = id + 1;
+  part_ = projection_part_ = id;
   frames_since_keyframe_ = 0;
   uncertain_frames_ = 0;
-  T_c_w_ = SE3();
+  T_c_w_ = T_w_c.inverse();
   last_pose_utime_ = frame.utime;
   velocity_.setZero();
   motion_prior_.reset(frame.utime, T_c_w_, kFirstPoseInformation * Mat6::Identity());
   state_ = TrackingState::kTracking;
-  result.status = TrackStatus::kInitialised;
-  result.pose.state = TrackingState::kTracking;
-  result.pose.T_w_c = SE3();
-  result.pose.points_tracked = static_cast<int>(data.new_points.size());
-  result.pose.quality = 1.0;
-  result.new_keyframe = std::move(data);
+  result->pose.state = TrackingState::kTracking;
+  result->pose.T_w_c = T_w_c;
+  result->pose.points_tracked = static_cast<int>(data.new_points.size());
+  result->pose.quality = 1.0;
+  result->new_keyframe = std::move(data);
+  return true;
+}
+
+// Lost where the map has nothing to relocalise against (TrackerOptions::new_part_after_failures
+// relocalisations failed in a row): a new part of the map from this frame, as from a first
+// frame, at the pose the velocity at the loss carried the camera to. The pose is published
+// as dodgy: its place relative to the map before is that guess until the ground's loop
+// closer joins the part to the rest (mapper.h, "Parts").
+std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std::string* why_not) {
+  const int coast = std::min(lost_frames_, options_.relocalise_coast_frames);
+  const SE3 coasted = SE3::exp(static_cast<double>(coast) * lost_velocity_) * T_c_w_;
+  const PartLeft left{T_c_w_.inverse(), last_pose_utime_.value_or(frame.utime), part_};
+  TrackResult result;
+  if (!addFirstKeyframe(frame, next_keyframe_id_, coasted.inverse(), &result)) {
+    *why_not = "no new part: " + result.error;
+    return std::nullopt;
+  }
+  result.status = TrackStatus::kTracked;
+  result.pose.state = TrackingState::kDodgy;
+  result.new_part = true;
+  if (!part_left_) part_left_ = left;  // a part started from a new part: bounded from the first loss
+  frames_since_rejoin_ = 0;
+  lost_frames_ = 0;
+  failed_relocalisations_ = 0;
+  lost_velocity_.setZero();
+  last_quality_ = 1.0;
+  anchor_.reset();
   return result;
+}
+
+void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
+  if (!part_left_ || !options_.reloc_features.enabled) return;
+  std::optional<Features3d> features = frameFeatures(frame);
+  const Map& map = replica_.map();
+  // Only into the part the camera was lost in: where it was lost is known in that part's
+  // frame alone, and it bounds where the return may put the camera.
+  const KeyframeId into = part_left_->part;
+  if (into == part_ || !map.keyframe(into)) return;
+  std::vector<KeyframeId> older;
+  for (const auto& [id, keyframe] : map.keyframes()) {
+    if (keyframe->part == into) older.push_back(id);
+  }
+  // The bag's best of them (the vocabulary waited for once: determinism), and on a large map
+  // only those are ranked by small blurry image, as a relocalisation's shortlist.
+  std::vector<KeyframeId> by_words;
+  if (features->size() > 0) {
+    indexBags();
+    const BowVector bag = projectVocabulary().bag(features->descriptors);
+    const size_t wanted = static_cast<size_t>(std::max(options_.relocalise_shortlist, options_.reloc_features.candidates));
+    for (const BowIndex::Hit& hit : bow_index_.query(bag, wanted, [&map, into](int id) {
+           const Keyframe* keyframe = map.keyframe(id);
+           return !keyframe || keyframe->part != into;
+         })) {
+      by_words.push_back(hit.image);
+    }
+  }
+  if (older.size() > static_cast<size_t>(options_.relocalise_shortlist)) older = by_words;
+  if (by_words.size() > static_cast<size_t>(options_.reloc_features.candidates)) {
+    by_words.resize(static_cast<size_t>(options_.reloc_features.candidates));
+  }
+  const SE3 T_c_w_before = T_c_w_;
+  // As a relocalisation does: from the views of the keyframes whose small blurry images are
+  // most like the frame's (this frame's is previous_sbi_ after trackFrame), then by features.
+  std::optional<Attempt> attempt;
+  // First where the camera was lost (it often comes back the way it went), as a relocalisation
+  // tries the last pose: the fine stage, then the coarse stage too.
+  {
+    projection_part_ = into;
+    updateLocalMap(part_left_->T_w_c, options_.local_map.relocalise_thaws);
+    Attempt tried = trackFrom(part_left_->T_w_c.inverse(), frame, Coarse::kNever);
+    if (isLost(tried) || tried.quality < options_.quality.good) tried = betterOf(tried, part_left_->T_w_c.inverse(), frame, Coarse::kAlways);
+    if (!isLost(tried) && tried.quality >= options_.quality.good && integrityOf(tried, frame).consistent()) attempt = tried;
+  }
+  for (const RelocalisationCandidate& candidate :
+       attempt ? std::vector<RelocalisationCandidate>{}
+               : relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &older)) {
+    projection_part_ = map.keyframe(candidate.keyframe)->part;
+    updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
+    const Attempt tried = trackFrom(candidate.T_w_c.inverse(), frame, Coarse::kAlways);
+    if (isLost(tried) || tried.quality < options_.quality.good || !integrityOf(tried, frame).consistent()) continue;
+    attempt = tried;
+    break;
+  }
+  if (!attempt) attempt = relocaliseByFeatures(frame, by_words, std::numeric_limits<double>::infinity(), &features);
+  const KeyframeId found_part = projection_part_;
+  projection_part_ = part_;
+  const auto restore_window = [this] { updateLocalMap(T_c_w_.inverse(), options_.local_map.relocalise_thaws); };
+  if (!attempt || found_part != into) return restore_window();
+  // Within the reach of the vehicle's speed from where it was lost (relocaliseReachM's bound).
+  const double away_s = std::max(0.0, static_cast<double>(frame.utime - part_left_->utime) * 1e-6);
+  const double reach_m = options_.relocalise_max_speed_m_s <= 0.0
+                             ? std::numeric_limits<double>::infinity()
+                             : options_.relocalise_max_speed_m_s * away_s + 1.0;
+  if ((attempt->T_c_w.inverse().translation() - part_left_->T_w_c.translation()).norm() > reach_m) return restore_window();
+  // The camera's pose moves into the found part; the published one takes the move in as it
+  // takes a map correction (followMapCorrection).
+  const SE3 old_pose = T_c_w_before.inverse(), new_pose = attempt->T_c_w.inverse();
+  const SE3 correction = new_pose * old_pose.inverse();
+  const SE3 old_published = published(old_pose);
+  T_c_w_ = attempt->T_c_w;
+  motion_prior_.moveWorld(correction);
+  if (depth_reference_) depth_reference_->T_w_c = correction * depth_reference_->T_w_c;
+  offset_.position = old_published.translation() - new_pose.translation();
+  offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
+  enterPart(found_part);
+  projection_part_ = part_;
+  setAnchor();
+  ++rejoins_;
 }
 
 // The replica as the file holds it, every keyframe acknowledged (the mapper loads the same
@@ -817,6 +1001,7 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     const bool near_last = candidate.keyframe < 0;
     const bool dodgy_enough = near_last && (i > 0 || last_pose_in_reach);  // [0]: the last pose
     const SE3 start = candidate.T_w_c.inverse();
+    projection_part_ = near_last ? part_ : replica_.map().keyframe(candidate.keyframe)->part;
     if (!near_last) updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
     // From a keyframe's view the camera may be anywhere near: the wide coarse search first.
     // From the last pose the camera has often hardly moved, and on weak texture the coarse
@@ -838,13 +1023,25 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     if (!withinReach(attempt.T_c_w, reach_m)) continue;       // a lookalike place
     if (!integrityOf(attempt, frame).consistent()) continue;  // a wrong pose is worse than none
     velocity_.setZero();
+    enterPart(projection_part_);
     return accept(attempt, frame, TrackingState::kRelocalised);
   }
   if (std::optional<Attempt> attempt = relocaliseByFeatures(frame, feature_candidates, reach_m, &features)) {
     velocity_.setZero();
+    enterPart(projection_part_);
     return accept(*attempt, frame, TrackingState::kRelocalised);
   }
+  projection_part_ = part_;
+  // Only a frame that could have been found counts: one with depth and corners (a covered
+  // camera's black frames are no attempt).
+  if (!frame.depth.empty() && cornerCount() >= options_.init_min_points) ++failed_relocalisations_;
+  const int after = options_.new_part_after_failures;
+  std::string why_not;
+  if (after > 0 && failed_relocalisations_ >= after && keyframes_allowed_ && mode_ != SlamMode::kMono) {
+    if (std::optional<TrackResult> started = startPart(frame, &why_not)) return *started;
+  }
   TrackResult result;
+  result.lost_reason = why_not;
   result.status = TrackStatus::kLost;
   result.pose.state = TrackingState::kLost;
   result.pose.T_w_c = T_c_w_.inverse();
@@ -951,6 +1148,7 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
     const std::optional<FeaturePose> pose =
         poseFromFeatures(current, extras->features, keyframe->T_w_c, camera_, pose_options_, o);
     if (!pose) continue;
+    projection_part_ = keyframe->part;
     // The features' pose is within the depth noise: the fine stage first, as from the last
     // pose; short of a good result the coarse stage too, and the better is kept.
     updateLocalMap(pose->T_w_c, options_.local_map.relocalise_thaws);
@@ -988,7 +1186,7 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   const DepthAlignmentOptions& o = options_.depth_align;
   anchors_.clear();
   size_t used = 0;
-  for (KeyframeId id : replica_.map().nearestKeyframes(attempt.T_c_w.inverse(), 4 * static_cast<size_t>(o.keyframes))) {
+  for (KeyframeId id : replica_.map().nearestKeyframesInPart(attempt.T_c_w.inverse(), 4 * static_cast<size_t>(o.keyframes), projection_part_)) {
     const KeyframeExtras* extras = extrasOf(id);
     if (!extras || extras->surface.empty()) continue;
     appendAnchors(extras->surface, replica_.map().keyframe(id)->T_w_c, &anchors_);
@@ -1150,7 +1348,7 @@ void Tracker::Impl::setAnchor() {
     }
   }
   if (!best) {
-    const std::vector<KeyframeId> nearest = replica_.map().nearestKeyframes(T_c_w_.inverse(), 1);
+    const std::vector<KeyframeId> nearest = replica_.map().nearestKeyframesInPart(T_c_w_.inverse(), 1, part_);
     if (!nearest.empty()) best = replica_.map().keyframe(nearest.front());
   }
   if (best) anchor_ = Anchor{best->id, best->T_w_c};
@@ -1162,14 +1360,14 @@ void Tracker::Impl::reanchorBeforeCull(const std::vector<KeyframeId>& removed) {
   if (!anchor_ || std::find(removed.begin(), removed.end(), anchor_->id) == removed.end()) return;
   anchor_.reset();
   const Map& map = replica_.map();
-  for (KeyframeId id : map.nearestKeyframes(T_c_w_.inverse(), map.numKeyframes())) {
+  for (KeyframeId id : map.nearestKeyframesInPart(T_c_w_.inverse(), map.numKeyframes(), part_)) {
     if (std::find(removed.begin(), removed.end(), id) != removed.end()) continue;
     anchor_ = Anchor{id, map.keyframe(id)->T_w_c};
     return;
   }
 }
 
-void Tracker::Impl::followMapCorrection() {
+void Tracker::Impl::followMapCorrection(bool joined) {
   if (!anchor_) return;
   const Keyframe* keyframe = replica_.map().keyframe(anchor_->id);
   if (!keyframe) {
@@ -1183,7 +1381,7 @@ void Tracker::Impl::followMapCorrection() {
   const SE3 old_pose = T_c_w_.inverse();
   const SE3 old_published = published(old_pose);
   const SE3 new_pose = correction * old_pose;
-  if (options_.follow_map_corrections) T_c_w_ = new_pose.inverse();
+  if (options_.follow_map_corrections || joined) T_c_w_ = new_pose.inverse();
   // The prior follows the map either way: the next fit finds the pose in the moved map, and
   // the map's move is not the vehicle's.
   motion_prior_.moveWorld(correction);
@@ -1258,6 +1456,7 @@ TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason
   lost_velocity_ = velocity_;
   uncertain_frames_ = 0;
   lost_frames_ = 1;  // this frame: the first relocalisation is two frames past the last pose
+  failed_relocalisations_ = 0;
   velocity_.setZero();
   motion_prior_.clear();
   last_quality_ = 0.0;
@@ -1303,14 +1502,14 @@ bool Tracker::Impl::poseFixed(const PoseUncertainty& uncertainty) const {
 
 // Whether new points from depth, measured in the frame that would become keyframe 0 (world
 // = camera), fix its pose: the pose fit at the identity gives the information matrix.
-bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points) const {
+bool Tracker::Impl::constrainsPose(const std::vector<NewPoint>& points, KeyframeId id, const SE3& T_c_w) const {
   std::vector<PoseObservation> observations;
   for (const NewPoint& np : points) {
-    if (!isProvisionalPointOf(np.point.id, 0)) break;
+    if (!isProvisionalPointOf(np.point.id, id)) break;
     observations.push_back({np.point.p_w, np.measurement.uv, np.measurement.level,
                             options_.pose.use_depth ? np.measurement.depth : 0.0});
   }
-  const PoseOptimizerResult fit = optimisePose(camera_, SE3(), observations, pose_options_);
+  const PoseOptimizerResult fit = optimisePose(camera_, T_c_w, observations, pose_options_);
   return fit.ok && poseFixed(poseUncertainty(fit.information));
 }
 
@@ -1375,7 +1574,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   const KeyframePolicyInput input{keyframe_allowed, frames_since_keyframe_,
                                   attempt.median_depth_m, result.pose.T_w_c, attempt.found,
                                   depthPointsAllowed(mode_, next_keyframe_id_), cornerCount(),
-                                  uncertain_frames_};
+                                  uncertain_frames_, part_};
   if (keyframes_allowed_ && shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     pending_keyframe_ = PendingKeyframe{frame.utime, result.pose.T_w_c, foundMeasurements(frame),
                                         frame.depth.empty() ? cv::Mat() : frame.depth.clone(), frame.depth_scale};
@@ -1469,6 +1668,7 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
   visible_.clear();
   points_in_view_.assign(views_.size(), 0);
   for (PointSlot& slot : replica_.slots()) {
+    if (slot.source && slot.source->part != projection_part_) continue;
     if (!projectPoint(camera_, T_c_w, views_, options_.projection, &slot)) continue;
     visible_.push_back(&slot);
     ++points_in_view_[static_cast<size_t>(slot.point->source_keyframe)];
@@ -1478,7 +1678,7 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
   // Only keyframes whose points' bounding sphere may be in view are looked at.
   for (const auto& [id, keyframe] : replica_.map().keyframes()) {
     const auto kf = static_cast<size_t>(id);
-    if (kf >= views_.size() || !views_[kf].cold) continue;
+    if (kf >= views_.size() || !views_[kf].cold || keyframe->part != projection_part_) continue;
     const MapReplica::Bounds bounds = replica_.boundsOf(id);
     if (bounds.radius < 0.0 || !sphereMayBeInView(camera_, T_c_w, bounds.centre, bounds.radius, options_.projection)) {
       continue;
@@ -1587,6 +1787,7 @@ KeyframeData Tracker::Impl::addKeyframe(PendingKeyframe pending) {
   data.depth_scale = pending.depth_scale;
   data.measurements = std::move(pending.measurements);
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
+  keyframe->part = part_;
   std::vector<NewPoint> points;
   if (depthPointsAllowed(mode_, data.id)) {
     points = createPointsFromDepth(*keyframe, camera_, options_.depth_points,
@@ -1618,6 +1819,7 @@ std::optional<KeyframeData> Tracker::finishFrame() { return impl_->finishFrame()
 TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(frame); }
 void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); }
 bool Tracker::lost() const { return impl_->lost(); }
+long Tracker::rejoins() const { return impl_->rejoins(); }
 std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }

@@ -110,6 +110,12 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_max_speed_m_s", &relocalise_max_speed_m_s, 0.0, 1000.0, "m/s",
           "a relocalised pose lies within this speed times the time since the last pose, plus 1 m, "
           "of the last pose; farther lookalike places are refused (0: anywhere)");
+  r->bind(s, "new_part_after_failures", &new_part_after_failures, 0, 1000000, "relocalisations",
+          "lost and this many relocalisations failed in a row (depth modes, adding keyframes): a new "
+          "part of the map from the frame's depth, where the camera coasted to (0: never)");
+  r->bind(s, "rejoin_every_frames", &rejoin_every_frames, 0, 1000000, "frames",
+          "in a part started where the camera was lost, every this many tracked frames also try the frame "
+          "against the keyframes of the part it was lost in, after its pose is out (0: never)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   occlusion.bind(r, s);

@@ -75,6 +75,9 @@ struct KeyframePolicyInput {
   // Consecutive tracked frames, this one included, whose pose sigma (the fit's translation
   // sigma, worst direction) exceeded uncertain_pose_sigma_m.
   int uncertain_frames = 0;
+  // The part of the map the frame is tracked in (Keyframe::part): only its keyframes cover a
+  // view (another part's lie where a guess put them).
+  KeyframeId part = 0;
 };
 
 // True if no keyframe is both within distance_ratio * median depth and within angle_deg,

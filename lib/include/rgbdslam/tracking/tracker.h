@@ -20,6 +20,8 @@
 //   (feature_relocaliser.h), from wherever the camera is in their view. Finally the keyframe
 //   decision (also when few points were found and depth can bring new ones); a new keyframe
 //   gets provisional points from measured depth at once and is returned for the mapper.
+//   Lost for long where nothing relocalises (new_part_after_failures), a frame with depth
+//   starts a new part of the map, as the first frame started the map.
 //   load(map, add_keyframes): before the first frame, start from a map file's content
 //   (map_file.h) instead of initialising a new map: the replica gets its keyframes (pyramids
 //   and small blurry images rebuilt, all acknowledged) and points, and the state is lost, so
@@ -200,6 +202,32 @@ struct TrackerOptions {
   // stamped before the last pose (a log replayed again) is not bounded.
   // 0: anywhere at once (a hand-held camera).
   double relocalise_max_speed_m_s = 3.0;  // [m/s]
+  // A camera lost where the map has nothing to relocalise against (it flew on into unmapped
+  // space: the 2-minute flight's world 2 was lost from frame 1053 to 3371 in corridors it
+  // had never seen) stays lost. After this many relocalisations failed in a row, a frame
+  // whose depth could start a map starts a new part of it instead, at the pose the camera
+  // coasted to (relocalise_coast_frames), and the tracker tracks and maps from there; the
+  // ground's loop closer joins the part to the rest when it recognises a place of it
+  // (mapper.h, "Parts"). Not in mono (no depth to start from), nor localising only. Only
+  // frames with depth and corners count (not a covered camera's). 60: two seconds of failed
+  // attempts at 30 Hz in line (the relocaliser thread of rgbd-tracker tries fewer frames:
+  // longer). A relocalisation into a mapped place can take a while: after the room's 5 s
+  // cover (synth:room,frames=400,cover=100-249) the first 37 uncovered frames failed; the
+  // 2 s gap relocalises at its first attempt. 0: never.
+  int new_part_after_failures = 60;  // [relocalisations]
+  // In a new part the tracker is not lost, so it would never relocalise back into the map it
+  // left when the camera returns there; the ground's loop closer joins the parts only when it
+  // recognises a place (on the 2-minute flight's world 2, 212 frames after the camera was
+  // back). So while in a part it started, every this many tracked frames the frame is also
+  // relocalised against the keyframes of the part the camera was lost in (where it was lost,
+  // in that part's frame, is what bounds the return), after its pose is out (finishFrame;
+  // about as long as a relocalisation, 10-20 ms): from where it was lost, from the views of
+  // the keyframes whose small blurry images are most like the frame's, then by ORB features,
+  // within relocalise_max_speed_m_s of where it was lost. Found, the tracker goes on in that
+  // part (its pose moved there; the published pose takes the move in at correction_rate_*)
+  // and stops trying; the part it left stays in the map until the ground's loop closer joins
+  // it. 0: never.
+  int rejoin_every_frames = 15;  // [frames]
   int random_seed = 1;             // seed of the point subset selection (deterministic)
   DepthIntegrityOptions integrity;  // every pose against the depth image (depth modes)
   OcclusionOptions occlusion;       // points behind a nearer surface not searched (depth modes)
@@ -220,6 +248,10 @@ struct TrackerOptions {
   // corridor 900 gained (10.5 against 18.9 mm). Without it the next frame's tracking finds
   // the corrected map from the old pose, and only the published pose is smoothed.
   bool follow_map_corrections = false;
+  // A correction that joins the camera's part of the map to another (mapper.h, "Parts") is
+  // followed at once whatever this says: it moves the part by what its start was guessed
+  // wrong, metres, and from the old pose the next frame would find the map beyond the fine
+  // stage's reach. The published pose still takes it in at correction_rate_*.
 
   void bind(OptionRegistry* registry, const std::string& section = "tracker");
 };
@@ -253,6 +285,11 @@ struct TrackResult {
   // The points found were too few to fix the pose, and the depth image held it with them
   // (depth_alignment.h): the state is dodgy.
   bool depth_aided = false;
+  // This frame started a new part of the map (TrackerOptions::new_part_after_failures): its
+  // keyframe is new_keyframe, its pose (dodgy) where the camera coasted to since the loss.
+  bool new_part = false;
+  // The part of the map the pose is in (Keyframe::part, as the tracker knew it then).
+  KeyframeId part = 0;
   // The pose fit's 1-sigma uncertainty (largest axis) of the camera centre and of the
   // orientation, from its measurements' noise models; infinite when the fit had none.
   double pose_sigma_m = INFINITY;    // [m]
@@ -294,6 +331,8 @@ class Tracker {
   // effect unless lost.
   void countPassedFrames(int frames);
   bool lost() const;  // relocalising: the next frame would be relocalised, not tracked
+  // Times a camera in a part it started went back into another part (rejoin_every_frames).
+  long rejoins() const;
   // Why the tracker cannot use 'frame' (no colour image, wrong size); empty: usable. Reads
   // the camera only, so a thread may call it while another tracks.
   std::string frameError(const RgbdFrame& frame) const;
