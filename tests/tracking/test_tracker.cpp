@@ -316,12 +316,16 @@ TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
 // find it. After new_part_after_failures failed attempts a frame with depth starts a new
 // part of the map (its keyframe says so and measures only its own points), published dodgy
 // where the camera coasted to, and the corridor is tracked on from there, right relative to
-// that start. With the option at 0 the camera stays lost.
+// that start. With the option at 0 the camera stays lost. In the new part every tracked
+// frame tries the room's part again (rejoin_every_frames 1), one try a frame: a round's tries
+// (by features, from where it was lost, from keyframe views) are spread over frames, so no
+// frame waits for the whole search.
 TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
   const SyntheticScene corridor(*parseSyntheticSpec("corridor,frames=60"));
   for (const int after : {5, 0}) {
     TrackerOptions options;
     options.new_part_after_failures = after;
+    options.rejoin_every_frames = 1;
     Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
     const TrackResult last_room = feed(&tracker, 0, 150);
     ASSERT_EQ(last_room.status, Status::kTracked);
@@ -366,6 +370,8 @@ TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
       ASSERT_TRUE(started);
       EXPECT_LE(*started, 10u) << "the first corridor frame is lost, then " << after << " relocalisations fail";
       EXPECT_EQ(tracked_after, static_cast<int>(corridor.numFrames() - *started - 1));
+      EXPECT_EQ(tracker.rejoinTries(), tracked_after) << "one try a frame after the new part's";
+      EXPECT_EQ(tracker.rejoins(), 0) << "the corridor is not in the room";
       std::printf("new part at corridor frame %zu, %d frames tracked after it\n", *started, tracked_after);
     }
   }

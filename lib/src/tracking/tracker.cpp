@@ -241,6 +241,7 @@ class Tracker::Impl {
     return data;
   }
   long rejoins() const { return rejoins_; }
+  long rejoinTries() const { return rejoin_tries_; }
 
   bool applyMap(const MapUpdate& update) {
     reanchorBeforeCull(update.removed_keyframes);
@@ -285,6 +286,7 @@ class Tracker::Impl {
     part_left_.reset();
     frames_since_rejoin_ = 0;
     rejoin_frame_.reset();
+    rejoin_round_.reset();
     last_pose_utime_.reset();
     frames_since_keyframe_ = 0;
     uncertain_frames_ = 0;
@@ -318,10 +320,10 @@ class Tracker::Impl {
   TrackResult initialise(const RgbdFrame& frame);
   bool addFirstKeyframe(const RgbdFrame& frame, KeyframeId id, const SE3& T_w_c, TrackResult* result);
   std::optional<TrackResult> startPart(const RgbdFrame& frame, std::string* why_not);
-  // While in a part started where the camera was lost, every rejoin_every_frames frames
-  // finishFrame() relocalises the frame against the other parts' keyframes: a camera back in
-  // mapped space goes on in that part (its pose moved there, the published one taking the
-  // difference in at correction_rate_*) instead of mapping it again.
+  // While in a part started where the camera was lost, finishFrame() relocalises frames
+  // against the keyframes of the part it was lost in, one try a frame (RejoinRound): a camera
+  // back in mapped space goes on in that part (its pose moved there, the published one taking
+  // the difference in at correction_rate_*) instead of mapping it again.
   void tryRejoin(const RgbdFrame& frame);
   // The tracker is in 'part' now; back in the part it had left (or in the map's first part),
   // there is nothing to rejoin.
@@ -331,7 +333,22 @@ class Tracker::Impl {
     if (first_part || (part_left_ && part_left_->part == part)) part_left_.reset();
   }
   TrackResult relocalise(const RgbdFrame& frame);
-  void updateLocalMap(const SE3& T_w_c, int max_thaws);
+  // Where a relocalisation tracks the frame from: a pose, the part whose points it projects,
+  // whether the pose is near the camera's (the last pose, a features' pose: the fine stage
+  // first) or a guess (a keyframe's view: the wide coarse search at once), and whether the
+  // local map moves there first.
+  struct RelocaliseStart {
+    SE3 T_w_c;
+    KeyframeId part = 0;
+    bool near = false;
+    bool thaw = true;
+  };
+  // 'extra_hot': keyframes the hot set may hold beyond the window while the local map is
+  // there (updateLocalMap).
+  Attempt relocaliseFrom(const RelocaliseStart& start, const RgbdFrame& frame, int extra_hot = 0);
+  // 'extra_hot' keyframes beyond the window stay hot: a rejoin's try leaves the camera's own
+  // window as it was (the next frames' local map updates freeze the surplus, oldest first).
+  void updateLocalMap(const SE3& T_w_c, int max_thaws, int extra_hot = 0);
   void storeColdExtras();
   // Per keyframe id: points of which it is the source that the last projection put in the
   // image (found or not, hot or cold source).
@@ -432,7 +449,8 @@ class Tracker::Impl {
   // a pose within 'reach_m' of the last; '*features' holds the frame's ORB features once
   // extracted (here, if not yet).
   std::optional<Attempt> relocaliseByFeatures(const RgbdFrame& frame, const std::vector<KeyframeId>& candidates,
-                                              double reach_m, std::optional<Features3d>* features);
+                                              double reach_m, std::optional<Features3d>* features,
+                                              int extra_hot = 0);
   Features3d frameFeatures(const RgbdFrame& frame) const;
   // Whether a lost frame is compared with a shortlist only (TrackerOptions::relocalise_shortlist).
   bool shortlisted() const;
@@ -502,7 +520,20 @@ class Tracker::Impl {
   std::optional<PartLeft> part_left_;
   int frames_since_rejoin_ = 0;
   std::optional<RgbdFrame> rejoin_frame_;  // the frame finishFrame() tries (its depth a copy)
+  // A rejoin's tries, one a frame, each after that frame's pose is out, so that no frame
+  // waits for a whole search (in one go, 25-35 ms on the 2-minute flight's world 1, where a
+  // frame takes 2 ms): the round's first frame is tried by
+  // features, the next by the last pose in the part left, the ones after from the views of
+  // that part's keyframes ranked for the first frame. A round starts every
+  // rejoin_every_frames frames.
+  struct RejoinRound {
+    KeyframeId into = 0;
+    std::vector<RelocalisationCandidate> views;  // [0]: the last pose in the part left (keyframe -1)
+    size_t next = 0;
+  };
+  std::optional<RejoinRound> rejoin_round_;
   long rejoins_ = 0;
+  long rejoin_tries_ = 0;  // one a frame at most (RejoinRound)
   // The time of the frame T_c_w_ was accepted on (none: a loaded map's start, where the
   // camera may be anywhere in it).
   std::optional<int64_t> last_pose_utime_;
@@ -647,8 +678,8 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
   tracked.inconsistent = frame_inconsistent_;
   if (tracked.status == TrackResult::Status::kTracked || tracked.status == TrackResult::Status::kRelocalised) {
     pending_local_map_ = tracked.pose.T_w_c;  // finishFrame
-    if (part_left_ && !tracked.new_part && options_.rejoin_every_frames > 0 &&
-        ++frames_since_rejoin_ >= options_.rejoin_every_frames && !frame.depth.empty()) {
+    if (part_left_ && !tracked.new_part && options_.rejoin_every_frames > 0 && !frame.depth.empty() &&
+        (rejoin_round_ || ++frames_since_rejoin_ >= options_.rejoin_every_frames)) {
       frames_since_rejoin_ = 0;
       rejoin_frame_ = RgbdFrame{};
       rejoin_frame_->depth = frame.depth.clone();
@@ -664,7 +695,7 @@ TrackResult Tracker::Impl::trackFrame(const RgbdFrame& frame) {
 // thawed now: the others of the window follow in the next frames.
 // Wanted first: the sources of the most points in view at the last projection, hot or cold
 // (so points the camera sees are not lost to the window), then the nearest keyframes.
-void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
+void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws, int extra_hot) {
   const LocalMapOptions& o = options_.local_map;
   if (o.keyframes <= 0 || replica_.map().numKeyframes() <= static_cast<size_t>(o.keyframes)) return;
   std::vector<std::pair<int, KeyframeId>> in_view;
@@ -682,7 +713,7 @@ void Tracker::Impl::updateLocalMap(const SE3& T_w_c, int max_thaws) {
   // malloc then kept). The list's tail is left out: the farthest of the nearest keyframes,
   // then the sources of the fewest points in view.
   if (wanted.size() > static_cast<size_t>(o.keyframes)) wanted.resize(static_cast<size_t>(o.keyframes));
-  replica_.updateLocalMap(wanted, max_thaws, o.changes_per_frame, o.jpeg_quality, o.keyframes);
+  replica_.updateLocalMap(wanted, max_thaws, o.changes_per_frame, o.jpeg_quality, o.keyframes + extra_hot);
   storeColdExtras();
 }
 
@@ -813,68 +844,64 @@ std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std:
 
 void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   if (!part_left_ || !options_.reloc_features.enabled) return;
-  std::optional<Features3d> features = frameFeatures(frame);
   const Map& map = replica_.map();
   // Only into the part the camera was lost in: where it was lost is known in that part's
   // frame alone, and it bounds where the return may put the camera.
   const KeyframeId into = part_left_->part;
+  if (rejoin_round_ && rejoin_round_->into != into) rejoin_round_.reset();
   if (into == part_ || !map.keyframe(into)) return;
-  std::vector<KeyframeId> older;
-  for (const auto& [id, keyframe] : map.keyframes()) {
-    if (keyframe->part == into) older.push_back(id);
-  }
-  // The bag's best of them (the vocabulary waited for once: determinism), and on a large map
-  // only those are ranked by small blurry image, as a relocalisation's shortlist.
-  std::vector<KeyframeId> by_words;
-  if (features->size() > 0) {
-    indexBags();
-    const BowVector bag = projectVocabulary().bag(features->descriptors);
-    const size_t wanted = static_cast<size_t>(std::max(options_.relocalise_shortlist, options_.reloc_features.candidates));
-    for (const BowIndex::Hit& hit : bow_index_.query(bag, wanted, [&map, into](int id) {
-           const Keyframe* keyframe = map.keyframe(id);
-           return !keyframe || keyframe->part != into;
-         })) {
-      by_words.push_back(hit.image);
-    }
-  }
-  if (older.size() > static_cast<size_t>(options_.relocalise_shortlist)) older = by_words;
-  if (by_words.size() > static_cast<size_t>(options_.reloc_features.candidates)) {
-    by_words.resize(static_cast<size_t>(options_.reloc_features.candidates));
-  }
+  // The camera's own window stays hot through a try (nothing to thaw back after it).
+  const int extra_hot = options_.local_map.relocalise_thaws;
   const SE3 T_c_w_before = T_c_w_;
-  // As a relocalisation does: from the views of the keyframes whose small blurry images are
-  // most like the frame's (this frame's is previous_sbi_ after trackFrame), then by features.
   std::optional<Attempt> attempt;
-  // First where the camera was lost (it often comes back the way it went), as a relocalisation
-  // tries the last pose: the fine stage, then the coarse stage too.
-  {
-    projection_part_ = into;
-    updateLocalMap(part_left_->T_w_c, options_.local_map.relocalise_thaws);
-    Attempt tried = trackFrom(part_left_->T_w_c.inverse(), frame, Coarse::kNever);
-    if (isLost(tried) || tried.quality < options_.quality.good) tried = betterOf(tried, part_left_->T_w_c.inverse(), frame, Coarse::kAlways);
+  ++rejoin_tries_;
+  if (!rejoin_round_) {
+    std::vector<KeyframeId> older;
+    for (const auto& [id, keyframe] : map.keyframes()) {
+      if (keyframe->part == into) older.push_back(id);
+    }
+    // The bag's best of them (the vocabulary waited for once: determinism), and on a large
+    // map only those are ranked by small blurry image, as a relocalisation's shortlist.
+    std::optional<Features3d> features = frameFeatures(frame);
+    std::vector<KeyframeId> by_words;
+    if (features->size() > 0) {
+      indexBags();
+      const BowVector bag = projectVocabulary().bag(features->descriptors);
+      const size_t wanted = static_cast<size_t>(std::max(options_.relocalise_shortlist, options_.reloc_features.candidates));
+      for (const BowIndex::Hit& hit : bow_index_.query(bag, wanted, [&map, into](int id) {
+             const Keyframe* keyframe = map.keyframe(id);
+             return !keyframe || keyframe->part != into;
+           })) {
+        by_words.push_back(hit.image);
+      }
+    }
+    if (older.size() > static_cast<size_t>(options_.relocalise_shortlist)) older = by_words;
+    // First where the camera was lost (it often comes back the way it went), then the views
+    // of the keyframes whose small blurry images are most like this frame's (previous_sbi_
+    // after trackFrame).
+    rejoin_round_ = RejoinRound{into, {RelocalisationCandidate{-1, 0.0, part_left_->T_w_c}}, 0};
+    for (const RelocalisationCandidate& view :
+         relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &older)) {
+      rejoin_round_->views.push_back(view);
+    }
+    attempt = relocaliseByFeatures(frame, by_words, std::numeric_limits<double>::infinity(), &features, extra_hot);
+  } else {
+    const RelocalisationCandidate view = rejoin_round_->views[rejoin_round_->next++];
+    if (rejoin_round_->next >= rejoin_round_->views.size()) rejoin_round_.reset();
+    const bool last_pose = view.keyframe < 0;
+    if (!last_pose && !map.keyframe(view.keyframe)) return;  // culled since the round's first frame
+    const Attempt tried = relocaliseFrom(RelocaliseStart{view.T_w_c, into, last_pose, true}, frame, extra_hot);
     if (!isLost(tried) && tried.quality >= options_.quality.good && integrityOf(tried, frame).consistent()) attempt = tried;
   }
-  for (const RelocalisationCandidate& candidate :
-       attempt ? std::vector<RelocalisationCandidate>{}
-               : relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &older)) {
-    projection_part_ = map.keyframe(candidate.keyframe)->part;
-    updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
-    const Attempt tried = trackFrom(candidate.T_w_c.inverse(), frame, Coarse::kAlways);
-    if (isLost(tried) || tried.quality < options_.quality.good || !integrityOf(tried, frame).consistent()) continue;
-    attempt = tried;
-    break;
-  }
-  if (!attempt) attempt = relocaliseByFeatures(frame, by_words, std::numeric_limits<double>::infinity(), &features);
   const KeyframeId found_part = projection_part_;
   projection_part_ = part_;
-  const auto restore_window = [this] { updateLocalMap(T_c_w_.inverse(), options_.local_map.relocalise_thaws); };
-  if (!attempt || found_part != into) return restore_window();
+  if (!attempt || found_part != into) return;
   // Within the reach of the vehicle's speed from where it was lost (relocaliseReachM's bound).
   const double away_s = std::max(0.0, static_cast<double>(frame.utime - part_left_->utime) * 1e-6);
   const double reach_m = options_.relocalise_max_speed_m_s <= 0.0
                              ? std::numeric_limits<double>::infinity()
                              : options_.relocalise_max_speed_m_s * away_s + 1.0;
-  if ((attempt->T_c_w.inverse().translation() - part_left_->T_w_c.translation()).norm() > reach_m) return restore_window();
+  if ((attempt->T_c_w.inverse().translation() - part_left_->T_w_c.translation()).norm() > reach_m) return;
   // The camera's pose moves into the found part; the published one takes the move in as it
   // takes a map correction (followMapCorrection).
   const SE3 old_pose = T_c_w_before.inverse(), new_pose = attempt->T_c_w.inverse();
@@ -887,6 +914,7 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
   enterPart(found_part);
   projection_part_ = part_;
+  rejoin_round_.reset();
   setAnchor();
   ++rejoins_;
 }
@@ -963,6 +991,23 @@ TrackResult Tracker::Impl::trackNormally(const RgbdFrame& frame) {
                 grade);
 }
 
+// From a keyframe's view the camera may be anywhere near: the wide coarse search first.
+// From a near pose the camera has often hardly moved, and on weak texture the coarse stage
+// can pull a pose off (the corridor), so the fine stage alone comes first; short of a good
+// result the coarse stage is tried as well (the camera moved a few pixels: 0.14 of the
+// points found without it, 0.97 with it, two frames after a loss in the room), and the
+// attempt that explains more of its searched points is kept.
+Attempt Tracker::Impl::relocaliseFrom(const RelocaliseStart& start, const RgbdFrame& frame, int extra_hot) {
+  projection_part_ = start.part;
+  if (start.thaw) updateLocalMap(start.T_w_c, options_.local_map.relocalise_thaws, extra_hot);
+  const SE3 T_c_w = start.T_w_c.inverse();
+  Attempt attempt = trackFrom(T_c_w, frame, start.near ? Coarse::kNever : Coarse::kAlways);
+  if (start.near && (isLost(attempt) || attempt.quality < options_.quality.good)) {
+    attempt = betterOf(attempt, T_c_w, frame, Coarse::kAlways);
+  }
+  return attempt;
+}
+
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   const int wanted = std::max(options_.relocalise_candidates, options_.reloc_features.candidates);
   std::optional<Features3d> features;       // the frame's ORB features, extracted at most once
@@ -1000,19 +1045,8 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
     const RelocalisationCandidate& candidate = candidates[i];
     const bool near_last = candidate.keyframe < 0;
     const bool dodgy_enough = near_last && (i > 0 || last_pose_in_reach);  // [0]: the last pose
-    const SE3 start = candidate.T_w_c.inverse();
-    projection_part_ = near_last ? part_ : replica_.map().keyframe(candidate.keyframe)->part;
-    if (!near_last) updateLocalMap(candidate.T_w_c, options_.local_map.relocalise_thaws);
-    // From a keyframe's view the camera may be anywhere near: the wide coarse search first.
-    // From the last pose the camera has often hardly moved, and on weak texture the coarse
-    // stage can pull a pose off (the corridor), so the fine stage alone comes first; short
-    // of a good result the coarse stage is tried as well (the camera moved a few pixels:
-    // 0.14 of the points found without it, 0.97 with it, two frames after a loss in the
-    // room), and the attempt that explains more of its searched points is kept.
-    Attempt attempt = trackFrom(start, frame, near_last ? Coarse::kNever : Coarse::kAlways);
-    if (near_last && (isLost(attempt) || attempt.quality < options_.quality.good)) {
-      attempt = betterOf(attempt, start, frame, Coarse::kAlways);
-    }
+    const KeyframeId part = near_last ? part_ : replica_.map().keyframe(candidate.keyframe)->part;
+    const Attempt attempt = relocaliseFrom(RelocaliseStart{candidate.T_w_c, part, near_last, !near_last}, frame);
     // A keyframe's view is a guess from the small blurry image: only a good result proves
     // it. From the last pose the bar is normal tracking's (dodgy is enough, the pose must be
     // fixed): where many points are hidden or unmatchable for a stretch (the corridor's
@@ -1136,7 +1170,7 @@ void Tracker::Impl::indexBag(KeyframeId id, const KeyframeExtras& extras) {
 
 std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& frame,
                                                            const std::vector<KeyframeId>& candidates, double reach_m,
-                                                           std::optional<Features3d>* features) {
+                                                           std::optional<Features3d>* features, int extra_hot) {
   const FeatureRelocaliserOptions& o = options_.reloc_features;
   if (!o.enabled || !depthInTracking(mode_) || frame.depth.empty() || !anyExtras()) return std::nullopt;
   if (!*features) *features = frameFeatures(frame);
@@ -1148,15 +1182,8 @@ std::optional<Attempt> Tracker::Impl::relocaliseByFeatures(const RgbdFrame& fram
     const std::optional<FeaturePose> pose =
         poseFromFeatures(current, extras->features, keyframe->T_w_c, camera_, pose_options_, o);
     if (!pose) continue;
-    projection_part_ = keyframe->part;
-    // The features' pose is within the depth noise: the fine stage first, as from the last
-    // pose; short of a good result the coarse stage too, and the better is kept.
-    updateLocalMap(pose->T_w_c, options_.local_map.relocalise_thaws);
-    const SE3 start = pose->T_w_c.inverse();
-    Attempt attempt = trackFrom(start, frame, Coarse::kNever);
-    if (isLost(attempt) || attempt.quality < options_.quality.good) {
-      attempt = betterOf(attempt, start, frame, Coarse::kAlways);
-    }
+    // The features' pose is within the depth noise: near, as the last pose is.
+    Attempt attempt = relocaliseFrom(RelocaliseStart{pose->T_w_c, keyframe->part, true, true}, frame, extra_hot);
     if (isLost(attempt) || attempt.quality < options_.quality.good) continue;
     // From a start centimetres off, one fine stage converges only part of the way (measured:
     // 2.5 cm left after a 5 s cover in the room, taken out over the next two frames as
@@ -1820,6 +1847,7 @@ TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(f
 void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); }
 bool Tracker::lost() const { return impl_->lost(); }
 long Tracker::rejoins() const { return impl_->rejoins(); }
+long Tracker::rejoinTries() const { return impl_->rejoinTries(); }
 std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
 bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
 const Map& Tracker::map() const { return impl_->map(); }

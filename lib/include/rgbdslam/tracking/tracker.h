@@ -218,12 +218,13 @@ struct TrackerOptions {
   // In a new part the tracker is not lost, so it would never relocalise back into the map it
   // left when the camera returns there; the ground's loop closer joins the parts only when it
   // recognises a place (on the 2-minute flight's world 2, 212 frames after the camera was
-  // back). So while in a part it started, every this many tracked frames the frame is also
-  // relocalised against the keyframes of the part the camera was lost in (where it was lost,
-  // in that part's frame, is what bounds the return), after its pose is out (finishFrame;
-  // about as long as a relocalisation, 10-20 ms): from where it was lost, from the views of
-  // the keyframes whose small blurry images are most like the frame's, then by ORB features,
-  // within relocalise_max_speed_m_s of where it was lost. Found, the tracker goes on in that
+  // back). So while in a part it started, every this many tracked frames a round of tries
+  // starts: frames are also relocalised against the keyframes of the part the camera was
+  // lost in (where it was lost, in that part's frame, is what bounds the return), after
+  // their pose is out (finishFrame), one try a frame so that no frame waits for a whole
+  // search: by ORB features (the round's first frame), from where it was lost, then from the
+  // views of the relocalise_candidates keyframes whose small blurry images were most like
+  // the first frame's; within relocalise_max_speed_m_s of where it was lost. Found, the tracker goes on in that
   // part (its pose moved there; the published pose takes the move in at correction_rate_*)
   // and stops trying; the part it left stays in the map until the ground's loop closer joins
   // it. 0: never.
@@ -333,6 +334,8 @@ class Tracker {
   bool lost() const;  // relocalising: the next frame would be relocalised, not tracked
   // Times a camera in a part it started went back into another part (rejoin_every_frames).
   long rejoins() const;
+  // Frames on which it tried to go back (at most one try a frame).
+  long rejoinTries() const;
   // Why the tracker cannot use 'frame' (no colour image, wrong size); empty: usable. Reads
   // the camera only, so a thread may call it while another tracks.
   std::string frameError(const RgbdFrame& frame) const;
