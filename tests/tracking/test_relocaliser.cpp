@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <vector>
 #include <opencv2/imgproc.hpp>
@@ -94,6 +95,34 @@ TEST(Relocaliser, RanksOnlyTheShortlist) {
   ASSERT_EQ(ranked.size(), 2u);
   for (const RelocalisationCandidate& candidate : ranked) {
     EXPECT_NE(std::find(among.begin(), among.end() - 1, candidate.keyframe), among.end() - 1);
+  }
+}
+
+// A shortlist for one part (a rejoin: where the camera was lost is known in that part's
+// frame only) holds that part's keyframes alone, within the reach; without a part the
+// nearest keyframes of any part come in.
+TEST(Relocaliser, ShortlistsOnePartWithinTheReach) {
+  Map map;
+  for (size_t i = 0; i < 400; i += 20) {
+    auto keyframe = std::make_unique<Keyframe>();
+    keyframe->id = static_cast<KeyframeId>(i / 20);
+    keyframe->part = keyframe->id < 10 ? 0 : 10;  // a second part from keyframe 10 on
+    keyframe->T_w_c = rankingRoom().groundTruthPose(i);
+    map.addKeyframe(std::move(keyframe));
+  }
+  const SE3 lost_at = map.keyframe(12)->T_w_c;
+  const BowIndex no_words;
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<KeyframeId> any = relocalisationShortlist(map, no_words, BowVector{}, lost_at, inf, 30, 4, nullptr);
+  EXPECT_TRUE(std::any_of(any.begin(), any.end(), [](KeyframeId id) { return id < 10; })) << "the control";
+  const std::vector<KeyframeId> in_part =
+      relocalisationShortlist(map, no_words, BowVector{}, lost_at, inf, 30, 4, nullptr, KeyframeId{0});
+  ASSERT_FALSE(in_part.empty());
+  for (KeyframeId id : in_part) EXPECT_LT(id, 10) << "keyframe " << id << " is in part 10";
+  // Within 0.3 m of keyframe 3's pose: keyframes near it only.
+  const SE3 near3 = map.keyframe(3)->T_w_c;
+  for (KeyframeId id : relocalisationShortlist(map, no_words, BowVector{}, near3, 0.3, 30, 4, nullptr, KeyframeId{0})) {
+    EXPECT_LE((map.keyframe(id)->T_w_c.translation() - near3.translation()).norm(), 0.3) << "keyframe " << id;
   }
 }
 

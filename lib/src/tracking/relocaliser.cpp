@@ -75,12 +75,15 @@ std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
 
 std::vector<KeyframeId> relocalisationShortlist(const Map& map, const BowIndex& index, const BowVector& bag,
                                                 const SE3& T_w_last, double reach_m, size_t n,
-                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words) {
+                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words,
+                                                std::optional<KeyframeId> part) {
   const auto beyond = [&](KeyframeId id) {
     const Keyframe* keyframe = map.keyframe(id);
-    return !keyframe || (keyframe->T_w_c.translation() - T_w_last.translation()).norm() > reach_m;
+    return !keyframe || (part && keyframe->part != *part) ||
+           (keyframe->T_w_c.translation() - T_w_last.translation()).norm() > reach_m;
   };
-  std::vector<KeyframeId> shortlist = map.nearestKeyframes(T_w_last, n / 2);
+  std::vector<KeyframeId> shortlist =
+      part ? map.nearestKeyframesInPart(T_w_last, n / 2, *part) : map.nearestKeyframes(T_w_last, n / 2);
   shortlist.erase(std::remove_if(shortlist.begin(), shortlist.end(), beyond), shortlist.end());
   if (bag.empty()) return shortlist;
   // Up to n / 2 of the best by words may be among the nearest already.

@@ -325,6 +325,8 @@ class Tracker::Impl {
   // back in mapped space goes on in that part (its pose moved there, the published one taking
   // the difference in at correction_rate_*) instead of mapping it again.
   void tryRejoin(const RgbdFrame& frame);
+  // How far from where it was lost in the part it left the camera can be by 'frame' [m].
+  double rejoinReachM(const RgbdFrame& frame) const;
   // The tracker is in 'part' now; back in the part it had left (or in the map's first part),
   // there is nothing to rejoin.
   void enterPart(KeyframeId part) {
@@ -856,32 +858,35 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   std::optional<Attempt> attempt;
   ++rejoin_tries_;
   if (!rejoin_round_) {
-    std::vector<KeyframeId> older;
-    for (const auto& [id, keyframe] : map.keyframes()) {
-      if (keyframe->part == into) older.push_back(id);
-    }
-    // The bag's best of them (the vocabulary waited for once: determinism), and on a large
-    // map only those are ranked by small blurry image, as a relocalisation's shortlist.
+    // Only keyframes of that part that may see where the camera can be: within the reach
+    // plus the depth range of where it was lost (as relocalise() bounds its candidates), and
+    // on a large part the shortlist of a relocalisation: the nearest to where it was lost,
+    // then the bag of words' best (the vocabulary waited for once: determinism).
+    const double keyframe_reach_m = rejoinReachM(frame) + options_.keyframe_build.max_depth_m;
     std::optional<Features3d> features = frameFeatures(frame);
-    std::vector<KeyframeId> by_words;
-    if (features->size() > 0) {
-      indexBags();
-      const BowVector bag = projectVocabulary().bag(features->descriptors);
-      const size_t wanted = static_cast<size_t>(std::max(options_.relocalise_shortlist, options_.reloc_features.candidates));
-      for (const BowIndex::Hit& hit : bow_index_.query(bag, wanted, [&map, into](int id) {
-             const Keyframe* keyframe = map.keyframe(id);
-             return !keyframe || keyframe->part != into;
-           })) {
-        by_words.push_back(hit.image);
+    std::vector<KeyframeId> among, by_words;
+    for (const auto& [id, keyframe] : map.keyframes()) {
+      if (keyframe->part == into &&
+          (keyframe->T_w_c.translation() - part_left_->T_w_c.translation()).norm() <= keyframe_reach_m) {
+        among.push_back(id);
       }
     }
-    if (older.size() > static_cast<size_t>(options_.relocalise_shortlist)) older = by_words;
+    BowVector bag;
+    if (features->size() > 0) {
+      indexBags();
+      bag = projectVocabulary().bag(features->descriptors);
+    }
+    const std::vector<KeyframeId> shortlist =
+        rgbdslam::relocalisationShortlist(map, bow_index_, bag, part_left_->T_w_c, keyframe_reach_m,
+                                          static_cast<size_t>(options_.relocalise_shortlist),
+                                          static_cast<size_t>(options_.reloc_features.candidates), &by_words, into);
+    if (among.size() > static_cast<size_t>(options_.relocalise_shortlist)) among = shortlist;
     // First where the camera was lost (it often comes back the way it went), then the views
     // of the keyframes whose small blurry images are most like this frame's (previous_sbi_
     // after trackFrame).
     rejoin_round_ = RejoinRound{into, {RelocalisationCandidate{-1, 0.0, part_left_->T_w_c}}, 0};
     for (const RelocalisationCandidate& view :
-         relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &older)) {
+         relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &among)) {
       rejoin_round_->views.push_back(view);
     }
     attempt = relocaliseByFeatures(frame, by_words, std::numeric_limits<double>::infinity(), &features, extra_hot);
@@ -896,12 +901,7 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   const KeyframeId found_part = projection_part_;
   projection_part_ = part_;
   if (!attempt || found_part != into) return;
-  // Within the reach of the vehicle's speed from where it was lost (relocaliseReachM's bound).
-  const double away_s = std::max(0.0, static_cast<double>(frame.utime - part_left_->utime) * 1e-6);
-  const double reach_m = options_.relocalise_max_speed_m_s <= 0.0
-                             ? std::numeric_limits<double>::infinity()
-                             : options_.relocalise_max_speed_m_s * away_s + 1.0;
-  if ((attempt->T_c_w.inverse().translation() - part_left_->T_w_c.translation()).norm() > reach_m) return;
+  if ((attempt->T_c_w.inverse().translation() - part_left_->T_w_c.translation()).norm() > rejoinReachM(frame)) return;
   // The camera's pose moves into the found part; the published one takes the move in as it
   // takes a map correction (followMapCorrection).
   const SE3 old_pose = T_c_w_before.inverse(), new_pose = attempt->T_c_w.inverse();
@@ -917,6 +917,13 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   rejoin_round_.reset();
   setAnchor();
   ++rejoins_;
+}
+
+// Within the reach of the vehicle's speed from where it was lost (relocaliseReachM's bound).
+double Tracker::Impl::rejoinReachM(const RgbdFrame& frame) const {
+  if (options_.relocalise_max_speed_m_s <= 0.0) return std::numeric_limits<double>::infinity();
+  const double away_s = std::max(0.0, static_cast<double>(frame.utime - part_left_->utime) * 1e-6);
+  return options_.relocalise_max_speed_m_s * away_s + 1.0;
 }
 
 // The replica as the file holds it, every keyframe acknowledged (the mapper loads the same

@@ -16,6 +16,7 @@
 // full resolution (bench_place_recognition, BM_RelocalisationRanking).
 // Call order: relocalisationCandidates(map, sbi, camera, n) -> try each pose in order.
 // Frames: T_w_c camera to world.
+#include <optional>
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
@@ -45,9 +46,11 @@ std::vector<RelocalisationCandidate> relocalisationCandidates(const Map& map,
 // bag of words over all keyframes in 'index' (images = keyframe ids; ids not in the map are
 // skipped) up to n in all; only keyframes within 'reach_m' of T_w_last (infinity: all). The
 // bag's best 'by_words_wanted' go to '*by_words' as well (the feature relocaliser's
-// candidates; may be null). 'bag' empty (no features): the nearest only.
+// candidates; may be null). 'bag' empty (no features): the nearest only. 'part': only that
+// part's keyframes (Keyframe::part; T_w_last is in its frame).
 std::vector<KeyframeId> relocalisationShortlist(const Map& map, const BowIndex& index, const BowVector& bag,
                                                 const SE3& T_w_last, double reach_m, size_t n,
-                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words);
+                                                size_t by_words_wanted, std::vector<KeyframeId>* by_words,
+                                                std::optional<KeyframeId> part = std::nullopt);
 
 }  // namespace rgbdslam
