@@ -316,16 +316,16 @@ TEST(Tracker, RelocalisesAfterTheCameraWasCovered) {
 // find it. After new_part_after_failures failed attempts a frame with depth starts a new
 // part of the map (its keyframe says so and measures only its own points), published dodgy
 // where the camera coasted to, and the corridor is tracked on from there, right relative to
-// that start. With the option at 0 the camera stays lost. In the new part every tracked
-// frame tries the room's part again (rejoin_every_frames 1), one try a frame: a round's tries
-// (by features, from where it was lost, from keyframe views) are spread over frames, so no
-// frame waits for the whole search.
+// that start. With the option at 0 the camera stays lost. In the new part the tracker tries
+// the room's part again in rounds (rejoin_every_frames 5 frames apart), one try a frame: a
+// round's tries (by features, from where it was lost, from keyframe views) are spread over
+// consecutive frames, so no frame waits for the whole search.
 TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
   const SyntheticScene corridor(*parseSyntheticSpec("corridor,frames=60"));
   for (const int after : {5, 0}) {
     TrackerOptions options;
     options.new_part_after_failures = after;
-    options.rejoin_every_frames = 1;
+    options.rejoin_every_frames = 5;
     Tracker tracker(room().camera(), options, SlamMode::kDepthBa, 1);
     const TrackResult last_room = feed(&tracker, 0, 150);
     ASSERT_EQ(last_room.status, Status::kTracked);
@@ -333,10 +333,16 @@ TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
     std::optional<size_t> started;
     SE3 start_pose;
     int lost = 0, tracked_after = 0;
+    std::string tries;  // per frame after the new part's: '1' a try, '0' none
     for (size_t i = 0; i < corridor.numFrames(); ++i) {
       RgbdFrame frame = corridor.render(i);
       frame.utime = roomFrame(150).utime + static_cast<int64_t>(i + 1) * 33333;
+      const long tries_before = tracker.rejoinTries();
       TrackResult result = tracker.track(frame);
+      if (started) {
+        ASSERT_LE(tracker.rejoinTries() - tries_before, 1) << "corridor frame " << i;
+        tries += tracker.rejoinTries() > tries_before ? '1' : '0';
+      }
       if (result.new_part) {
         ASSERT_FALSE(started) << "a second new part at corridor frame " << i;
         started = i;
@@ -370,7 +376,11 @@ TEST(Tracker, StartsANewPartOfTheMapWhereNothingRelocalises) {
       ASSERT_TRUE(started);
       EXPECT_LE(*started, 10u) << "the first corridor frame is lost, then " << after << " relocalisations fail";
       EXPECT_EQ(tracked_after, static_cast<int>(corridor.numFrames() - *started - 1));
-      EXPECT_EQ(tracker.rejoinTries(), tracked_after) << "one try a frame after the new part's";
+      // Rounds of 4 consecutive tries (features, last pose, 2 views), each starting on the
+      // 5th frame after the last ended.
+      EXPECT_NE(tries.find("00001111"), std::string::npos) << tries;
+      EXPECT_EQ(tries.find("11111"), std::string::npos) << tries;
+      EXPECT_EQ(tries.find("00000"), std::string::npos) << tries;
       EXPECT_EQ(tracker.rejoins(), 0) << "the corridor is not in the room";
       std::printf("new part at corridor frame %zu, %d frames tracked after it\n", *started, tracked_after);
     }

@@ -332,7 +332,12 @@ class Tracker::Impl {
   void enterPart(KeyframeId part) {
     part_ = part;
     const bool first_part = !replica_.map().keyframes().empty() && replica_.map().keyframes().begin()->second->part == part;
-    if (first_part || (part_left_ && part_left_->part == part)) part_left_.reset();
+    if (first_part || (part_left_ && part_left_->part == part)) leavePartLeft();
+  }
+  // Nothing to go back to: no rejoin, and no round of tries left over for a later loss.
+  void leavePartLeft() {
+    part_left_.reset();
+    rejoin_round_.reset();
   }
   TrackResult relocalise(const RgbdFrame& frame);
   // Where a relocalisation tracks the frame from: a pose, the part whose points it projects,
@@ -522,14 +527,14 @@ class Tracker::Impl {
   std::optional<PartLeft> part_left_;
   int frames_since_rejoin_ = 0;
   std::optional<RgbdFrame> rejoin_frame_;  // the frame finishFrame() tries (its depth a copy)
-  // A rejoin's tries, one a frame, each after that frame's pose is out, so that no frame
-  // waits for a whole search (in one go, 25-35 ms on the 2-minute flight's world 1, where a
-  // frame takes 2 ms): the round's first frame is tried by
-  // features, the next by the last pose in the part left, the ones after from the views of
-  // that part's keyframes ranked for the first frame. A round starts every
-  // rejoin_every_frames frames.
+  // A rejoin's tries, spread over frames, each after that frame's pose is out, so that no
+  // frame waits for a whole search (in one go, 25-35 ms on the 2-minute flight's world 1,
+  // where a frame takes 2 ms): the round's first frame ranks the candidates and is tried by
+  // features (a keyframe view tracked only where the features give a pose), the next frame
+  // from the last pose in the part left, one frame each from the views of that part's
+  // keyframes ranked on the first frame. A round starts rejoin_every_frames tracked frames
+  // with depth after the last one ended.
   struct RejoinRound {
-    KeyframeId into = 0;
     std::vector<RelocalisationCandidate> views;  // [0]: the last pose in the part left (keyframe -1)
     size_t next = 0;
   };
@@ -835,6 +840,7 @@ std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std:
   result.pose.state = TrackingState::kDodgy;
   result.new_part = true;
   if (!part_left_) part_left_ = left;  // a part started from a new part: bounded from the first loss
+  rejoin_round_.reset();  // a round's views were ranked before this loss
   frames_since_rejoin_ = 0;
   lost_frames_ = 0;
   failed_relocalisations_ = 0;
@@ -850,14 +856,17 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   // Only into the part the camera was lost in: where it was lost is known in that part's
   // frame alone, and it bounds where the return may put the camera.
   const KeyframeId into = part_left_->part;
-  if (rejoin_round_ && rejoin_round_->into != into) rejoin_round_.reset();
-  if (into == part_ || !map.keyframe(into)) return;
+  // That part joined another on the ground (its first keyframe renamed) or gone: where the
+  // camera was lost is no longer known in any part's frame.
+  const Keyframe* first = map.keyframe(into);
+  if (!first || first->part != into) return leavePartLeft();
+  if (into == part_) return;
   // The camera's own window stays hot through a try (nothing to thaw back after it).
   const int extra_hot = options_.local_map.relocalise_thaws;
   const SE3 T_c_w_before = T_c_w_;
   std::optional<Attempt> attempt;
-  ++rejoin_tries_;
   if (!rejoin_round_) {
+    ++rejoin_tries_;
     // Only keyframes of that part that may see where the camera can be: within the reach
     // plus the depth range of where it was lost (as relocalise() bounds its candidates), and
     // on a large part the shortlist of a relocalisation: the nearest to where it was lost,
@@ -884,17 +893,22 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
     // First where the camera was lost (it often comes back the way it went), then the views
     // of the keyframes whose small blurry images are most like this frame's (previous_sbi_
     // after trackFrame).
-    rejoin_round_ = RejoinRound{into, {RelocalisationCandidate{-1, 0.0, part_left_->T_w_c}}, 0};
+    rejoin_round_ = RejoinRound{{RelocalisationCandidate{-1, 0.0, part_left_->T_w_c}}, 0};
     for (const RelocalisationCandidate& view :
          relocalisationCandidates(map, previous_sbi_, camera_, options_.relocalise_candidates, &among)) {
       rejoin_round_->views.push_back(view);
     }
     attempt = relocaliseByFeatures(frame, by_words, std::numeric_limits<double>::infinity(), &features, extra_hot);
   } else {
-    const RelocalisationCandidate view = rejoin_round_->views[rejoin_round_->next++];
+    // The next view whose keyframe is still in the map (culled since the round's first frame).
+    RelocalisationCandidate view = rejoin_round_->views[rejoin_round_->next++];
+    while (view.keyframe >= 0 && !map.keyframe(view.keyframe) && rejoin_round_->next < rejoin_round_->views.size()) {
+      view = rejoin_round_->views[rejoin_round_->next++];
+    }
     if (rejoin_round_->next >= rejoin_round_->views.size()) rejoin_round_.reset();
     const bool last_pose = view.keyframe < 0;
-    if (!last_pose && !map.keyframe(view.keyframe)) return;  // culled since the round's first frame
+    if (!last_pose && !map.keyframe(view.keyframe)) return;
+    ++rejoin_tries_;
     const Attempt tried = relocaliseFrom(RelocaliseStart{view.T_w_c, into, last_pose, true}, frame, extra_hot);
     if (!isLost(tried) && tried.quality >= options_.quality.good && integrityOf(tried, frame).consistent()) attempt = tried;
   }

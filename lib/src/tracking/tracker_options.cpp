@@ -114,9 +114,9 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "lost and this many relocalisations failed in a row (depth modes, adding keyframes): a new "
           "part of the map from the frame's depth, where the camera coasted to (0: never)");
   r->bind(s, "rejoin_every_frames", &rejoin_every_frames, 0, 1000000, "frames",
-          "in a part started where the camera was lost, every this many tracked frames start a round of "
-          "tries of the frames against the keyframes of the part it was lost in, one try a frame after "
-          "its pose is out (0: never)");
+          "in a part started where the camera was lost, this many tracked frames with depth after the last "
+          "round of tries, start another: the frames against the keyframes of the part it was lost in, one "
+          "try a frame after its pose is out (0: never)");
   r->bind(s, "random_seed", &random_seed, 0, INT_MAX, "", "seed of the point subset selection");
   integrity.bind(r, s);
   occlusion.bind(r, s);

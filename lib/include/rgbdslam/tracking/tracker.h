@@ -218,13 +218,17 @@ struct TrackerOptions {
   // In a new part the tracker is not lost, so it would never relocalise back into the map it
   // left when the camera returns there; the ground's loop closer joins the parts only when it
   // recognises a place (on the 2-minute flight's world 2, 212 frames after the camera was
-  // back). So while in a part it started, every this many tracked frames a round of tries
-  // starts: frames are also relocalised against the keyframes of the part the camera was
-  // lost in (where it was lost, in that part's frame, is what bounds the return), after
-  // their pose is out (finishFrame), one try a frame so that no frame waits for a whole
-  // search: by ORB features (the round's first frame), from where it was lost, then from the
-  // views of the relocalise_candidates keyframes whose small blurry images were most like
-  // the first frame's; within relocalise_max_speed_m_s of where it was lost. Found, the tracker goes on in that
+  // back). So while in a part it started, a round of tries starts this many tracked frames
+  // (with depth) after the last round ended: frames are also relocalised against the
+  // keyframes of the part the camera was lost in (where it was lost, in that part's frame,
+  // is what bounds the return), after their pose is out (finishFrame), spread over frames so
+  // that no frame waits for a whole search: by ORB features on the round's first frame, from
+  // where it was lost on the next, then one frame each from the views of the
+  // relocalise_candidates keyframes whose small blurry images were most like the first
+  // frame's. Candidates are only keyframes of that part within the depth range of where the
+  // camera can be (relocalise_max_speed_m_s from where it was lost, plus 1 m), on a large
+  // part the relocaliser's shortlist of them; the pose found must lie within that reach.
+  // Found, the tracker goes on in that
   // part (its pose moved there; the published pose takes the move in at correction_rate_*)
   // and stops trying; the part it left stays in the map until the ground's loop closer joins
   // it. 0: never.
