@@ -528,7 +528,7 @@ class Tracker::Impl {
   int frames_since_rejoin_ = 0;
   std::optional<RgbdFrame> rejoin_frame_;  // the frame finishFrame() tries (its depth a copy)
   // A rejoin's tries, spread over frames, each after that frame's pose is out, so that no
-  // frame waits for a whole search (in one go, 25-35 ms on the 2-minute flight's world 1,
+  // frame waits for a whole search (in one go, 17-37 ms on the 2-minute flight's world 1,
   // where a frame takes 2 ms): the round's first frame ranks the candidates and is tried by
   // features (a keyframe view tracked only where the features give a pose), the next frame
   // from the last pose in the part left, one frame each from the views of that part's
