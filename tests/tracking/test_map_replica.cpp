@@ -308,41 +308,67 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   check("keyframe 1 culled");
 }
 
-// Freezing a keyframe removes its points' slots in slot order, as a scan of the slots would,
-// even where the index lists them in another order (a point re-described by the keyframe
-// comes last in its list): a removal moves the last slot into the gap, so the order of
-// removal decides the slots' order, and with it the tracker's search order.
-TEST_F(LocalMap, FreezingKeepsTheSlotsOrderOfAScan) {
-  for (PointId id = 0; id < 20; ++id) {
-    replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.2 * id), id % 3,
-                                                                {300, 200}, 0}),
-                                          Measurement{id, {300, 200}, 0, 1.0}});
+// Freezing or culling a keyframe removes its points' slots in slot order, as a scan of the
+// slots would, even where the index lists them in another order (a point re-described by
+// the keyframe comes last in its list): a removal moves the last slot into the gap, so the
+// order of removal decides the slots' order, and with it the tracker's search order.
+class SlotOrder : public LocalMap {
+ protected:
+  // Points 0-19 described by keyframe id % 3, then point 'moved' re-described by keyframe
+  // 'to': last in that keyframe's index.
+  void SetUpPoints(PointId moved, KeyframeId to) {
+    for (PointId id = 0; id < 20; ++id) {
+      replica->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.2 * id), id % 3,
+                                                                  {300, 200}, 0}),
+                                            Measurement{id, {300, 200}, 0, 1.0}});
+    }
+    acknowledgeAll();
+    MapUpdate delta;
+    delta.version = 2;
+    delta.points.push_back(MapPointData{moved, Vec3(0.4, -0.5, 1.8), to, Eigen::Vector2d(250, 240), 0});
+    ASSERT_TRUE(replica->apply(delta));
+    ASSERT_EQ(replica->describedBy(to).back(), moved) << "the re-described point is last in the index";
   }
-  acknowledgeAll();
-  MapUpdate delta;
-  delta.version = 2;
-  delta.points.push_back(MapPointData{4, Vec3(0.4, -0.5, 1.8), 0, Eigen::Vector2d(250, 240), 0});  // 1 -> 0
-  ASSERT_TRUE(replica->apply(delta));
-  ASSERT_EQ(replica->describedBy(0).back(), 4) << "the re-described point is last in the index";
-  // The order a scan gives: keyframe 0's slots found in slot order, each removal moving the
-  // last slot into its place.
-  std::vector<PointId> expected;
-  for (const PointSlot& slot : replica->slots()) expected.push_back(slot.point->id);
-  std::vector<PointId> described;
-  for (const PointSlot& slot : replica->slots()) {
-    if (slot.point->source_keyframe == 0) described.push_back(slot.point->id);
+  // The order a scan gives: the keyframe's slots found in slot order, each removal moving
+  // the last slot into its place.
+  std::vector<PointId> scanOrderWithout(KeyframeId kf) const {
+    std::vector<PointId> expected;
+    for (const PointSlot& slot : replica->slots()) expected.push_back(slot.point->id);
+    std::vector<PointId> described;
+    for (const PointSlot& slot : replica->slots()) {
+      if (slot.point->source_keyframe == kf) described.push_back(slot.point->id);
+    }
+    EXPECT_EQ(described.size(), 9u);  // 101, 1, 4, ..., 19 and the re-described 3
+    for (PointId id : described) {
+      const auto it = std::find(expected.begin(), expected.end(), id);
+      *it = expected.back();
+      expected.pop_back();
+    }
+    return expected;
   }
-  ASSERT_EQ(described.size(), 9u);  // 100, and 0, 3, 4, 6, 9, ..., 18
-  for (PointId id : described) {
-    const auto it = std::find(expected.begin(), expected.end(), id);
-    *it = expected.back();
-    expected.pop_back();
+  std::vector<PointId> slotOrder() const {
+    std::vector<PointId> order;
+    for (const PointSlot& slot : replica->slots()) order.push_back(slot.point->id);
+    return order;
   }
-  replica->updateLocalMap({1, 2}, 2, 10, 90);
-  ASSERT_TRUE(keyframe(0).cold());
-  std::vector<PointId> remaining;
-  for (const PointSlot& slot : replica->slots()) remaining.push_back(slot.point->id);
-  EXPECT_EQ(remaining, expected);
+};
+
+TEST_F(SlotOrder, FreezingKeepsTheSlotsOrderOfAScan) {
+  SetUpPoints(3, 1);  // 0 -> 1: keyframe 1 describes 101, 1, 4, 7, 10, 13, 16, 19, 3
+  const std::vector<PointId> expected = scanOrderWithout(1);
+  replica->updateLocalMap({0, 2}, 2, 10, 90);
+  ASSERT_TRUE(keyframe(1).cold());
+  EXPECT_EQ(slotOrder(), expected);
+}
+
+// The mapper culling a keyframe (its points not re-described elsewhere go with it) is found
+// from the index, not a pass over the map, in the same order.
+TEST_F(SlotOrder, CullingKeepsTheSlotsOrderOfAScan) {
+  SetUpPoints(3, 1);
+  const std::vector<PointId> expected = scanOrderWithout(1);
+  ASSERT_TRUE(replica->apply(removal(3, {}, {1})));
+  ASSERT_FALSE(replica->map().hasKeyframe(1));
+  EXPECT_EQ(slotOrder(), expected);
 }
 
 }  // namespace
