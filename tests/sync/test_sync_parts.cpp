@@ -308,6 +308,27 @@ TEST(SyncPublisher, ReceiptsShowingAStuckTrackerBringASnapshot) {
   EXPECT_EQ(publisher.versionsCaughtUp(), 1);
 }
 
+// A version published just before a receipt is not yet a sign of a stuck tracker: it may be
+// on its way, or waiting behind a frame. Only a receipt period later, still not applied, it is.
+TEST(SyncPublisher, AVersionPublishedJustBeforeAReceiptIsNotTakenForALostOne) {
+  SmallMap m;
+  MapPublisher publisher(MapPublisherOptions{0.0, 1000.0, {}});
+  publisher.start(9, 0);
+  for (int64_t v = 1; v <= 3; ++v) {
+    publisher.note(m.changes, true);
+    ASSERT_TRUE(publisher.publishDue(m.map, 1, v * kS));
+  }
+  MapReceipt r;
+  r.map_id = 9;
+  r.applied_version = r.newest_version_seen = 3;  // in step
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kNoted);
+  publisher.note(m.changes, true);
+  ASSERT_TRUE(publisher.publishDue(m.map, 1, 4 * kS));  // version 4, a moment before the next receipt
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kNoted) << "version 4 may be on its way";
+  EXPECT_EQ(publisher.onReceipt(r), ReceiptVerdict::kSnapshotAsked) << "a receipt period later: lost";
+  EXPECT_EQ(publisher.snapshotsAsked(), 1);
+}
+
 TEST(SyncLink, LosesDelaysDuplicatesAndReordersRepeatably) {
   LinkOptions options;
   options.loss = 0.1;

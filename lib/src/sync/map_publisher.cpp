@@ -25,7 +25,7 @@ void MapPublisher::start(int64_t map_id, int64_t last_version) {
   snapshot_due_ = true;
   pending_ = MapChanges{};
   last_receipt_version_ = -1;
-  same_receipts_ = 0;
+  same_receipts_ = behind_receipts_ = 0;
 }
 
 void MapPublisher::startAfterLoss(int64_t map_id, int64_t tracker_version) {
@@ -54,14 +54,17 @@ ReceiptVerdict MapPublisher::onReceipt(const MapReceipt& receipt) {
   }
   const bool holds_unapplied = receipt.newest_version_seen > receipt.applied_version &&
                                receipt.newest_version_seen > last_snapshot_version_;
-  same_receipts_ = receipt.applied_version == last_receipt_version_ ? same_receipts_ + 1 : 1;
+  const bool same = receipt.applied_version == last_receipt_version_;
+  same_receipts_ = same ? same_receipts_ + 1 : 1;
+  behind_receipts_ = same && receipt.applied_version < version_at_last_receipt_ ? behind_receipts_ + 1 : 0;
   last_receipt_version_ = receipt.applied_version;
+  version_at_last_receipt_ = version_;
   in_step_ = in_step_ || (receipt.applied_version > 0 && receipt.applied_version == receipt.newest_version_seen &&
                           (receipt.applied_version == version_ || same_receipts_ == 1));
   // Below the last snapshot, the snapshot may still be on its way (a large one over a slow
   // link): give it two more receipt periods before asking again.
   const int needed = receipt.applied_version >= last_snapshot_version_ ? 2 : 4;
-  const bool stuck = receipt.applied_version < version_ && same_receipts_ >= needed;
+  const bool stuck = behind_receipts_ >= needed - 1;
   if (snapshot_due_ || !(holds_unapplied || stuck)) return ReceiptVerdict::kNoted;
   snapshot_due_ = true;
   ++snapshots_asked_;
@@ -99,7 +102,7 @@ std::optional<MapUpdate> MapPublisher::publishDue(const Map& map, KeyframeId ack
     last_snapshot_version_ = version_;
     snapshot_due_ = false;
     last_receipt_version_ = -1;  // judge the tracker again from its next receipts
-    same_receipts_ = 0;
+    same_receipts_ = behind_receipts_ = 0;
   }
   return update;
 }
