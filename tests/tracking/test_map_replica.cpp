@@ -308,6 +308,104 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
   check("keyframe 1 culled");
 }
 
+// A map version's work on cold keyframes' points waits (apply with defer_cold) while what the
+// search uses goes in at once, and once done it leaves the replica as a whole apply would:
+// a delta (re-described, moved and removed points, a culled keyframe) and then a snapshot.
+TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
+  auto whole = std::make_unique<MapReplica>(camera);
+  std::swap(whole, replica);
+  SetUp();  // 'replica' a second one, built the same way
+  std::swap(whole, replica);
+  for (MapReplica* r : {replica.get(), whole.get()}) {
+    for (PointId id = 0; id < 30; ++id) {
+      r->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.1 * id), id % 3,
+                                                            {300, 200}, 0}),
+                                      Measurement{id, {300, 200}, 0, 1.0}});
+    }
+    r->updateLocalMap({0}, 2, 10, 90);  // keyframes 1 and 2 cold
+    MapUpdate acked;
+    acked.version = 1;
+    acked.acked_below = 3;
+    ASSERT_TRUE(r->apply(acked));
+  }
+  ASSERT_TRUE(keyframe(1).cold() && keyframe(2).cold() && !keyframe(0).cold());
+  MapUpdate delta;
+  delta.version = 2;
+  delta.keyframes = {{0, SE3(Mat3::Identity(), Vec3(0, 0.5, 0)), 0}, {2, SE3(), 0}};
+  delta.points.push_back(MapPointData{4, Vec3(3, 1, 4), 2, Eigen::Vector2d(250, 240), 1});  // 1 -> 2, cold
+  delta.points.push_back(MapPointData{7, Vec3(1, 1, 4), 0, Eigen::Vector2d(250, 240), 0});  // 1 -> 0, hot
+  delta.moved_points = {{3, Vec3(0.3, 0.1, 2)}, {5, Vec3(0.5, 0.1, 2)}};                   // hot, cold
+  delta.removed_points = {6, 8};                                                              // hot, cold
+  delta.removed_keyframes = {1};                                                              // cold
+  const auto check_hot = [&](const char* when) {
+    EXPECT_EQ(keyframe(0).T_w_c.translation().y(), 0.5) << when;
+    EXPECT_EQ(replica->map().point(7)->source_keyframe, 0) << when;
+    EXPECT_EQ(replica->map().point(3)->p_w.y(), 0.1) << when;
+    EXPECT_EQ(replica->map().point(6), nullptr) << when;
+  };
+  ASSERT_TRUE(replica->apply(delta, /*defer_cold=*/true));
+  ASSERT_TRUE(whole->apply(delta));
+  check_hot("at once");
+  EXPECT_TRUE(replica->hasDeferred());
+  EXPECT_EQ(replica->map().point(4)->source_keyframe, 1) << "waits";
+  EXPECT_NE(replica->map().point(5)->p_w.y(), 0.1) << "waits";
+  EXPECT_NE(replica->map().point(8), nullptr) << "waits";
+  EXPECT_TRUE(replica->map().hasKeyframe(1)) << "waits";
+  std::vector<KeyframeId> culled;
+  int steps = 0;
+  while (replica->applyDeferred(2, &culled) > 0) ASSERT_LT(++steps, 100);
+  EXPECT_GE(steps, 1) << "done a few entries a call";
+  EXPECT_EQ(culled, std::vector<KeyframeId>{1});
+  check_hot("after");
+  const auto same = [&](const char* when) {
+    ASSERT_EQ(replica->map().numPoints(), whole->map().numPoints()) << when;
+    ASSERT_EQ(replica->map().numKeyframes(), whole->map().numKeyframes()) << when;
+    for (const auto& [id, point] : whole->map().points()) {
+      const MapPoint* mine = replica->map().point(id);
+      ASSERT_NE(mine, nullptr) << when << ", point " << id;
+      EXPECT_EQ(mine->p_w, point.p_w) << when << ", point " << id;
+      EXPECT_EQ(mine->source_keyframe, point.source_keyframe) << when << ", point " << id;
+    }
+    for (const auto& [id, kf] : whole->map().keyframes()) {
+      std::vector<PointId> a = replica->describedBy(id), b = whole->describedBy(id);
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      EXPECT_EQ(a, b) << when << ", keyframe " << id;
+    }
+    std::vector<PointId> a, b;
+    for (const PointSlot& slot : replica->slots()) a.push_back(slot.point->id);
+    for (const PointSlot& slot : whole->slots()) b.push_back(slot.point->id);
+    EXPECT_EQ(a, b) << when;
+  };
+  same("the delta");
+  // A snapshot: every point but 9 and 10 (cold keyframe 2's and hot keyframe 0's: culled),
+  // each moved. Work left from it is done first by the next version.
+  MapUpdate snapshot;
+  snapshot.version = 3;
+  snapshot.is_snapshot = true;
+  snapshot.acked_below = 3;
+  for (const auto& [id, kf] : whole->map().keyframes()) snapshot.keyframes.push_back({id, kf->T_w_c, 0});
+  for (const auto& [id, point] : whole->map().points()) {
+    if (id == 9 || id == 10) continue;
+    MapPointData data = point.data();
+    data.p_w.z() += 0.25;
+    snapshot.points.push_back(data);
+  }
+  std::sort(snapshot.points.begin(), snapshot.points.end(),
+            [](const MapPointData& a, const MapPointData& b) { return a.id < b.id; });
+  ASSERT_TRUE(replica->apply(snapshot, /*defer_cold=*/true));
+  ASSERT_TRUE(whole->apply(snapshot));
+  EXPECT_EQ(replica->map().point(9), nullptr) << "hot: at once";
+  EXPECT_NE(replica->map().point(11), nullptr);
+  EXPECT_TRUE(replica->hasDeferred());
+  MapUpdate next;
+  next.version = 4;
+  ASSERT_TRUE(replica->apply(next, /*defer_cold=*/true));
+  ASSERT_TRUE(whole->apply(next));
+  EXPECT_FALSE(replica->hasDeferred());
+  same("the snapshot");
+}
+
 // Freezing or culling a keyframe removes its points' slots in slot order, as a scan of the
 // slots would, even where the index lists them in another order (a point re-described by
 // the keyframe comes last in its list): a removal moves the last slot into the gap, so the

@@ -199,6 +199,7 @@ void MapReplica::clear() {
   slot_index_.clear();
   described_.clear();
   bounds_.clear();
+  deferred_ = Deferred{};
 }
 
 // Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists. A
@@ -240,7 +241,8 @@ void MapReplica::removePoint(PointId id) {
   map_.removePoint(id);
 }
 
-bool MapReplica::apply(const MapUpdate& update) {
+bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
+  applyDeferred(SIZE_MAX);  // versions in order
   bool unknown = false;
   acked_below_ = std::max(acked_below_, update.acked_below);
   std::map<KeyframeId, KeyframeId> renamed;  // parts the mapper joined to others
@@ -260,45 +262,127 @@ bool MapReplica::apply(const MapUpdate& update) {
     const auto it = renamed.find(keyframe->part);
     if (it != renamed.end()) keyframe->part = it->second;
   }
+  // Work on points without a slot (a cold keyframe's: not searched) can wait (defer_cold).
+  const auto slotless = [&](PointId id) { return defer_cold && !slot_index_.count(id); };
   if (update.is_snapshot) {
-    std::unordered_set<PointId> kept;
-    for (const MapPointData& p : update.points) kept.insert(p.id);
-    std::vector<PointId> gone;
-    for (const auto& [id, point] : map_.points()) {
-      if (!kept.count(id) && point.source_keyframe < acked_below_) gone.push_back(id);
+    // Points of acknowledged keyframes absent from it were culled: looked for keyframe by
+    // keyframe (the index), after the snapshot's points (equivalent: none of those goes).
+    deferred_.kept.clear();
+    for (const MapPointData& p : update.points) deferred_.kept.push_back(p.id);
+    std::sort(deferred_.kept.begin(), deferred_.kept.end());
+    for (const auto& [id, keyframe] : map_.keyframes()) {
+      if (id >= acked_below_) continue;
+      if (defer_cold && keyframe->cold()) {
+        deferred_.gone_in.push_back(id);
+      } else {
+        removeAbsentPoints(id);
+      }
     }
-    for (PointId id : gone) removePoint(id);
   }
   for (const MapPointData& p : update.points) {
-    if (!map_.hasKeyframe(p.source_keyframe)) {
+    const Keyframe* source = map_.keyframe(p.source_keyframe);
+    if (!source) {
       unknown = true;
-      continue;
+    } else if (source->cold() && slotless(p.id)) {
+      deferred_.points.push_back(p);
+    } else {
+      putPointAndSlot(p);
     }
-    const MapPoint point(p);
-    const MapPoint* before = map_.point(p.id);
-    const bool same_patch = before && before->source_keyframe == p.source_keyframe &&
-                            before->source_level == p.level && before->source_uv == p.uv;
-    MapPoint* stored = putPoint(point);
-    if (same_patch && slot_index_.count(p.id)) continue;  // slot and patch cache stay valid
-    addSlot(stored);
   }
   for (const PointPosition& moved : update.moved_points) {
-    MapPoint* point = map_.point(moved.id);
-    if (point) {
-      point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
-      growBounds(point->source_keyframe, point->p_w);
-    } else {
+    if (!map_.point(moved.id)) {
       unknown = true;
+    } else if (slotless(moved.id)) {
+      deferred_.moved.push_back(moved);
+    } else {
+      movePoint(moved);
     }
   }
-  for (PointId id : update.removed_points) removePoint(id);
+  for (PointId id : update.removed_points) {
+    if (slotless(id)) {
+      deferred_.removed_points.push_back(id);
+    } else {
+      removePoint(id);
+    }
+  }
   for (KeyframeId id : update.removed_keyframes) {
     // The mapper culls only keyframes it has integrated, never keyframe 0: a message naming
     // another is refused for it (this keyframe would never come back to the replica).
-    if (id == 0 || id >= acked_below_) unknown = unknown || map_.hasKeyframe(id);
-    else removeKeyframe(id);
+    const Keyframe* keyframe = map_.keyframe(id);
+    if (id == 0 || id >= acked_below_) {
+      unknown = unknown || keyframe;
+    } else if (keyframe && keyframe->cold() && defer_cold) {
+      deferred_.removed_keyframes.push_back(id);
+    } else {
+      removeKeyframe(id);
+    }
   }
   return !unknown;
+}
+
+bool MapReplica::Deferred::empty() const {
+  return gone_in.size() == next_gone && points.size() == next_point && moved.size() == next_moved &&
+         removed_points.size() == next_removed_point && removed_keyframes.size() == next_removed_keyframe;
+}
+
+// In the order apply() would have taken them: a snapshot's culled points, then the points,
+// the moves, the removed points and the culled keyframes.
+size_t MapReplica::applyDeferred(size_t max_entries, std::vector<KeyframeId>* removed_keyframes) {
+  Deferred& d = deferred_;
+  size_t done = 0;
+  for (; done < max_entries && d.next_gone < d.gone_in.size(); ++d.next_gone) {
+    done += removeAbsentPoints(d.gone_in[d.next_gone]);
+  }
+  for (; done < max_entries && d.next_point < d.points.size(); ++d.next_point, ++done) {
+    if (map_.hasKeyframe(d.points[d.next_point].source_keyframe)) putPointAndSlot(d.points[d.next_point]);
+  }
+  for (; done < max_entries && d.next_moved < d.moved.size(); ++d.next_moved, ++done) {
+    if (map_.point(d.moved[d.next_moved].id)) movePoint(d.moved[d.next_moved]);
+  }
+  for (; done < max_entries && d.next_removed_point < d.removed_points.size(); ++d.next_removed_point, ++done) {
+    removePoint(d.removed_points[d.next_removed_point]);
+  }
+  for (; done < max_entries && d.next_removed_keyframe < d.removed_keyframes.size(); ++d.next_removed_keyframe) {
+    const KeyframeId id = d.removed_keyframes[d.next_removed_keyframe];
+    done += 1 + describedBy(id).size();
+    removeKeyframe(id);
+    if (removed_keyframes) removed_keyframes->push_back(id);
+  }
+  if (d.empty()) d = Deferred{};  // its memory too
+  return d.empty() ? 0 : 1;
+}
+
+bool MapReplica::hasDeferred() const { return !deferred_.empty(); }
+
+void MapReplica::putPointAndSlot(const MapPointData& p) {
+  const MapPoint* before = map_.point(p.id);
+  const bool same_patch = before && before->source_keyframe == p.source_keyframe && before->source_level == p.level &&
+                          before->source_uv == p.uv;
+  MapPoint* stored = putPoint(MapPoint(p));
+  if (same_patch && slot_index_.count(p.id)) return;  // slot and patch cache stay valid
+  addSlot(stored);
+}
+
+void MapReplica::movePoint(const PointPosition& moved) {
+  MapPoint* point = map_.point(moved.id);
+  point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
+  growBounds(point->source_keyframe, point->p_w);
+}
+
+// A snapshot's points of keyframe 'id' absent from it (deferred_.kept), in slot order (as in
+// freeze()). Returns how many points were looked at.
+size_t MapReplica::removeAbsentPoints(KeyframeId id) {
+  const std::vector<PointId>& points = describedBy(id);
+  std::vector<std::pair<size_t, PointId>> gone;
+  for (PointId pid : points) {
+    if (std::binary_search(deferred_.kept.begin(), deferred_.kept.end(), pid)) continue;
+    const auto it = slot_index_.find(pid);
+    gone.emplace_back(it == slot_index_.end() ? SIZE_MAX : it->second, pid);
+  }
+  const size_t looked_at = points.size() + 1;
+  std::sort(gone.begin(), gone.end());
+  for (const auto& [index, pid] : gone) removePoint(pid);
+  return looked_at;
 }
 
 // After the update's points: those the mapper kept were re-described from other keyframes;

@@ -243,14 +243,13 @@ class Tracker::Impl {
   long rejoins() const { return rejoins_; }
   long rejoinTries() const { return rejoin_tries_; }
 
-  bool applyMap(const MapUpdate& update) {
+  bool applyMap(const MapUpdate& update, bool defer_cold) {
     reanchorBeforeCull(update.removed_keyframes);
-    const bool known = replica_.apply(update);
-    if (update.is_snapshot || !update.removed_keyframes.empty()) {  // keyframes the mapper culled
-      for (auto it = extras_.begin(); it != extras_.end();) {
-        it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
-      }
-      extras_cache_.clear();
+    std::vector<KeyframeId> culled_before;  // held back from the versions before: done first
+    replica_.applyDeferred(SIZE_MAX, &culled_before);
+    const bool known = replica_.apply(update, defer_cold);
+    if (update.is_snapshot || !update.removed_keyframes.empty() || !culled_before.empty()) {  // keyframes the mapper culled
+      forgetCulledKeyframes();
       for (KeyframeId id : update.removed_keyframes) {
         if (id >= 0 && id <= INT_MAX) bow_index_.remove(static_cast<int>(id));
       }
@@ -267,6 +266,19 @@ class Tracker::Impl {
     }
     followMapCorrection(/*joined=*/part_ != part_before);
     return known;
+  }
+  bool applyDeferredMap(size_t max_entries) {
+    std::vector<KeyframeId> culled;
+    const bool left = replica_.applyDeferred(max_entries, &culled) > 0;
+    if (!culled.empty()) forgetCulledKeyframes();
+    return left;
+  }
+  // Relocalisation's features of keyframes no longer in the replica.
+  void forgetCulledKeyframes() {
+    for (auto it = extras_.begin(); it != extras_.end();) {
+      it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
+    }
+    extras_cache_.clear();
   }
   const Map& map() const { return replica_.map(); }
   const KeyframeStore* keyframeStore() const { return store_.get(); }
@@ -1870,7 +1882,8 @@ bool Tracker::lost() const { return impl_->lost(); }
 long Tracker::rejoins() const { return impl_->rejoins(); }
 long Tracker::rejoinTries() const { return impl_->rejoinTries(); }
 std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
-bool Tracker::applyMap(const MapUpdate& update) { return impl_->applyMap(update); }
+bool Tracker::applyMap(const MapUpdate& update, bool defer_cold) { return impl_->applyMap(update, defer_cold); }
+bool Tracker::applyDeferredMap(size_t max_entries) { return impl_->applyDeferredMap(max_entries); }
 const Map& Tracker::map() const { return impl_->map(); }
 void Tracker::reset() { impl_->reset(); }
 void Tracker::load(const LoadedMap& loaded, bool add_keyframes) { impl_->load(loaded, add_keyframes); }

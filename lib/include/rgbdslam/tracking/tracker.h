@@ -345,7 +345,11 @@ class Tracker {
   std::string frameError(const RgbdFrame& frame) const;
 
   // Returns false when entries named keyframes the replica lacks (they were skipped).
-  bool applyMap(const MapUpdate& update);
+  // defer_cold: the work on cold keyframes' points is held back (MapReplica::apply) for
+  // applyDeferredMap(), which does up to max_entries of it and returns whether any is left;
+  // the next applyMap() does what is left first.
+  bool applyMap(const MapUpdate& update, bool defer_cold = false);
+  bool applyDeferredMap(size_t max_entries);
   void load(const LoadedMap& loaded, bool add_keyframes);
 
   const Map& map() const;
