@@ -87,14 +87,16 @@ class MapReplica {
   Keyframe* addAcknowledgedKeyframe(std::unique_ptr<Keyframe> keyframe);
   void addAcknowledgedPoint(const MapPoint& point);
   // Returns false when entries named keyframes the replica lacks (they were skipped).
-  // defer_cold: the work on points without a slot (a cold keyframe's, not searched) and on
-  // culled cold keyframes is held back for applyDeferred(), so that the tracking thread can
-  // spread it over the time between frames (issue 10, item 6); what the search uses (every
-  // keyframe's pose and part, the points with slots) is applied at once. Any work held back
+  // defer_cold: the work on points without a slot (a cold keyframe's, not searched: put,
+  // re-described, removed, or absent from a snapshot) and on culled cold keyframes is held
+  // back for applyDeferred(), so that the tracking thread can spread it over the time
+  // between frames (issue 10, item 6); what the search uses (every keyframe's pose and part,
+  // the points with slots) and every move are applied at once. Any work held back
   // is done first, whole: map versions go in in order.
   bool apply(const MapUpdate& update, bool defer_cold = false);
-  // Does up to about max_entries of the work held back (a point each; a keyframe culled or
-  // looked through for a snapshot's absent points, one plus its points), in the order apply()
+  // Does up to about max_entries of the work held back (a point each; a keyframe looked
+  // through for a snapshot's absent points, one plus its points; a keyframe culled, 100 plus
+  // its points: its store entries are the costly part), in the order apply()
   // would have; appends the keyframes culled to 'removed_keyframes'. Returns 0 when none is
   // left. The replica is consistent in between: a keyframe thawed meanwhile gets its slots,
   // and the work held back then updates them as for any hot keyframe.
@@ -127,7 +129,6 @@ class MapReplica {
  private:
   MapPoint* putPoint(const MapPoint& point);  // map_.addPoint, with the index and bounds
   void putPointAndSlot(const MapPointData& point);  // an update's point: a new slot if its patch changed
-  void movePoint(const PointPosition& moved);        // a known point's new position
   size_t removeAbsentPoints(KeyframeId id);          // a snapshot's culled points of a keyframe
   void unindex(KeyframeId source, PointId id);  // no longer described by 'source'
   void growBounds(KeyframeId id, const Vec3& p_w);
@@ -153,10 +154,9 @@ class MapReplica {
     std::vector<PointId> kept;       // a snapshot's point ids, sorted
     std::vector<KeyframeId> gone_in;  // keyframes whose points absent from 'kept' go
     std::vector<MapPointData> points;
-    std::vector<PointPosition> moved;
     std::vector<PointId> removed_points;
     std::vector<KeyframeId> removed_keyframes;
-    size_t next_gone = 0, next_point = 0, next_moved = 0, next_removed_point = 0, next_removed_keyframe = 0;
+    size_t next_gone = 0, next_point = 0, next_removed_point = 0, next_removed_keyframe = 0;
     bool empty() const;
   };
   Deferred deferred_;
