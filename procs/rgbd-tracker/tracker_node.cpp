@@ -22,6 +22,10 @@ constexpr double kMaxMapWaitMs = 100.0;
 // ...and when this many wait, the oldest is applied as the next arrives: a flood of map
 // messages holds no more than this many decoded.
 constexpr size_t kMaxPendingMaps = 8;
+// A map version's work on cold keyframes' points is held back (Tracker::applyMap) and done
+// this many entries at a time (0.1-0.5 ms on one core) while no frame waits: a snapshot or a
+// join's cull took 18-52 ms in one block between frames on the 10-minute flight.
+constexpr size_t kDeferredMapEntries = 200;
 
 double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
@@ -125,12 +129,16 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
 // Handles everything that has arrived (frames into the backlog, map versions decoded and
 // queued), then tracks the oldest frame of the backlog; map versions are applied when no
 // frame waits, or once they have waited kMaxMapWaitMs (issue 10, item 6: a frame does not
-// wait for a map update).
+// wait for a map update), their work on cold keyframes held back and done
+// kDeferredMapEntries at a time while no frame waits.
 void TrackerNode::handleAvailable(int timeout_ms) {
   const int count = local_ == link_ ? 1 : 2;
   for (int round = 0; round < kMaxHandlePerLoop; ++round) {
     pollfd fds[2] = {{local_->getFileno(), POLLIN, 0}, {link_->getFileno(), POLLIN, 0}};
-    if (::poll(fds, count, round == 0 && backlog_.empty() ? timeout_ms : 0) <= 0) break;
+    // Work held back from a map version goes on at once (not while the relocaliser thread
+    // holds the tracker: the loop would only spin).
+    const bool wait = round == 0 && backlog_.empty() && !(deferred_map_work_ && !relocalising());
+    if (::poll(fds, count, wait ? timeout_ms : 0) <= 0) break;
     if (fds[0].revents & POLLIN) local_->handle();
     if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
   }
@@ -145,6 +153,11 @@ void TrackerNode::handleAvailable(int timeout_ms) {
   while (!pending_maps_.empty() && !relocalising() &&
          (backlog_.empty() || msBetween(pending_maps_.front().received, now) >= kMaxMapWaitMs)) {
     applyOldestMap();
+  }
+  if (deferred_map_work_ && backlog_.empty() && pending_maps_.empty() && !relocalising()) {
+    const auto start = Clock::now();
+    deferred_map_work_ = tracker_.applyDeferredMap(kDeferredMapEntries);
+    map_deferred_ms_.add(msBetween(start, Clock::now()));
   }
 }
 
@@ -393,7 +406,8 @@ void TrackerNode::applyMap(const MapUpdate& update) {
   const auto now = Clock::now();
   const MapReceiveResult r = sync_.receive(update, steadyUs(now), [this](const MapUpdate& u) {
     const auto start = Clock::now();
-    const bool known = tracker_.applyMap(u);
+    const bool known = tracker_.applyMap(u, /*defer_cold=*/true);
+    deferred_map_work_ = true;  // perhaps: the next applyDeferredMap() says
     map_apply_ms_.add(msBetween(start, Clock::now()));
     return known;
   });
@@ -568,6 +582,8 @@ void TrackerNode::printSummary() const {
               after_pose_ms_.quantile(0.99), after_pose_ms_.quantile(1.0));
   std::printf("map_apply_ms_median %.2f\nmap_apply_ms_p99 %.2f\nmap_apply_ms_max %.2f\n", map_apply_ms_.quantile(0.5),
               map_apply_ms_.quantile(0.99), map_apply_ms_.quantile(1.0));
+  std::printf("map_deferred_ms_median %.2f\nmap_deferred_ms_p99 %.2f\nmap_deferred_ms_max %.2f\n",
+              map_deferred_ms_.quantile(0.5), map_deferred_ms_.quantile(0.99), map_deferred_ms_.quantile(1.0));
   std::printf("keyframe_encode_ms_median %.2f\nkeyframe_encode_ms_max %.2f\n", encode_ms_.quantile(0.5),
               encode_ms_.quantile(1.0));
   std::printf("keyframe_ack_ms_median %.1f\nkeyframe_ack_ms_max %.1f\nkeyframe_in_map_ms_median %.1f\nkeyframe_in_map_ms_max %.1f\n",

@@ -177,6 +177,8 @@ class TrackerNode {
   // Work between frames on this thread, after the pose is out: a frame's keyframe and
   // local map (Tracker::finishFrame), and applying a map version to the replica.
   RecentSamples after_pose_ms_, map_apply_ms_;
+  RecentSamples map_deferred_ms_;   // each step of a map version's work held back
+  bool deferred_map_work_ = false;  // a map version's work on cold keyframes is left
 
   struct Counters {
     long frames = 0, frames_skipped = 0, frames_passed = 0, poses = 0, lost = 0, bad_frames = 0, bad_frame_messages = 0,
