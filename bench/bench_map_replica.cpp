@@ -7,8 +7,14 @@
 //   keyframe poses, 2000 points moved, one keyframe culled (a cold one, as most culls are;
 //   a different one each iteration: the map loses 120 points an iteration, at most 100).
 //   BM_ApplyMoveAll: a delta moving every point and keyframe (a loop closure or a join).
-// Counters: median and worst time of one apply. Target: well under a frame period (33 ms),
-// and flat in the map's size for a cull.
+//   BM_ApplySnapshot: the whole map, every point nudged (after a lost delta, or the
+//   mapper's fallback).
+//   BM_ApplyBulkCull: 100 cold keyframes culled in one delta, half their points re-described
+//   by keyframes that stay (as after a join where two parts overlap).
+// Each whole (last argument 0), and as rgbd-tracker applies (1): the work on cold keyframes'
+// points held back, then done in steps between frames.
+// Counters: median and worst time of the block of work done at once, worst step. Target:
+// both well under a frame period (33 ms), and flat in the map's size for a cull.
 // Run: taskset -c 0 build/bench/bench_map_replica
 #include <benchmark/benchmark.h>
 
@@ -16,6 +22,7 @@
 #include <chrono>
 #include <cstdio>
 #include <random>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -31,6 +38,7 @@ constexpr int kPointsPerKeyframe = 120;
 constexpr int kHot = 40;
 
 struct Built {
+  std::unique_ptr<KeyframeStore> store;  // cold keyframes' images, as on the flight computer
   std::unique_ptr<MapReplica> replica;
   int keyframes = 0;
 };
@@ -51,7 +59,11 @@ const cv::Mat& image(PinholeCamera* camera) {
 Built build(int keyframes) {
   PinholeCamera camera;
   const cv::Mat& grey = image(&camera);
-  Built b{std::make_unique<MapReplica>(camera), keyframes};
+  Built b{nullptr, std::make_unique<MapReplica>(camera), keyframes};
+  if (auto store = KeyframeStore::open("/var/tmp")) {
+    b.store = std::move(*store);
+    b.replica->setStore(b.store.get());
+  }
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(40.0, 600.0), v(40.0, 440.0), depth(1.0, 4.0);
   PointId next_point = 0;
@@ -80,23 +92,50 @@ Built build(int keyframes) {
   return b;
 }
 
-double timedApply(MapReplica* replica, const MapUpdate& update) {
-  const auto start = std::chrono::steady_clock::now();
-  replica->apply(update);
+// With 'defer' (the second argument 1), as rgbd-tracker applies: the version's work on cold
+// keyframes' points held back, then done kDeferredEntries at a time (its kDeferredMapEntries):
+// 'at once' is the block between two frames, each step another.
+constexpr size_t kDeferredEntries = 200;
+
+struct Times {
+  RecentSamples at_once{1 << 20}, steps{1 << 20};
+};
+
+double msSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-void report(benchmark::State& state, const char* what, int keyframes, const RecentSamples& times) {
-  state.counters["median_ms"] = times.quantile(0.5);
-  state.counters["max_ms"] = times.quantile(1.0);
-  std::printf("%s, %d keyframes (%d points, %d hot keyframes): %zu applies, median %.2f ms, max %.2f ms\n", what,
-              keyframes, keyframes * kPointsPerKeyframe, kHot, times.size(), times.quantile(0.5), times.quantile(1.0));
+void timedApply(MapReplica* replica, const MapUpdate& update, bool defer, Times* times) {
+  auto start = std::chrono::steady_clock::now();
+  replica->apply(update, defer);
+  times->at_once.add(msSince(start));
+  for (size_t left = 1; left > 0;) {
+    start = std::chrono::steady_clock::now();
+    left = replica->applyDeferred(kDeferredEntries);
+    if (defer) times->steps.add(msSince(start));
+  }
+}
+
+void report(benchmark::State& state, const std::string& what, int keyframes, bool defer, const Times& times) {
+  state.counters["median_ms"] = times.at_once.quantile(0.5);
+  state.counters["max_ms"] = times.at_once.quantile(1.0);
+  state.counters["step_max_ms"] = times.steps.quantile(1.0);
+  std::printf("%s, %d keyframes (%d points, %d hot keyframes), %s: %zu applies, median %.2f ms, max %.2f ms", what.c_str(),
+              keyframes, keyframes * kPointsPerKeyframe, kHot, defer ? "cold work held back" : "whole",
+              times.at_once.size(), times.at_once.quantile(0.5), times.at_once.quantile(1.0));
+  if (defer) {
+    std::printf("; then %.1f steps of %zu entries an apply, median %.3f ms, max %.3f ms", 
+                static_cast<double>(times.steps.size()) / static_cast<double>(std::max<size_t>(times.at_once.size(), 1)),
+                kDeferredEntries, times.steps.quantile(0.5), times.steps.quantile(1.0));
+  }
+  std::printf("\n");
 }
 
 void BM_ApplyCull(benchmark::State& state) {
   const int keyframes = static_cast<int>(state.range(0));
   Built b = build(keyframes);
-  RecentSamples times(1 << 20);
+  Times times;
+  const bool defer = state.range(1) != 0;
   int64_t version = 2;
   KeyframeId culled = 1;
   std::mt19937 rng(11);
@@ -115,15 +154,16 @@ void BM_ApplyCull(benchmark::State& state) {
     }
     delta.removed_keyframes = {culled++};
     state.ResumeTiming();
-    times.add(timedApply(b.replica.get(), delta));
+    timedApply(b.replica.get(), delta, defer, &times);
   }
-  report(state, "a delta culling one keyframe, 2000 points moved", keyframes, times);
+  report(state, "a delta culling one keyframe, 2000 points moved", keyframes, defer, times);
 }
 
 void BM_ApplyMoveAll(benchmark::State& state) {
   const int keyframes = static_cast<int>(state.range(0));
   Built b = build(keyframes);
-  RecentSamples times(1 << 20);
+  Times times;
+  const bool defer = state.range(1) != 0;
   int64_t version = 2;
   for (auto _ : state) {
     state.PauseTiming();
@@ -137,13 +177,77 @@ void BM_ApplyMoveAll(benchmark::State& state) {
       delta.moved_points.push_back(PointPosition{id, point.p_w + Vec3(0, 0.001, 0)});
     }
     state.ResumeTiming();
-    times.add(timedApply(b.replica.get(), delta));
+    timedApply(b.replica.get(), delta, defer, &times);
   }
-  report(state, "a delta moving every keyframe and point", keyframes, times);
+  report(state, "a delta moving every keyframe and point", keyframes, defer, times);
+}
+
+// The mapper's whole map (after a lost delta, or its fallback every 30 s): every keyframe
+// and point, the points nudged.
+void BM_ApplySnapshot(benchmark::State& state) {
+  const int keyframes = static_cast<int>(state.range(0));
+  Built b = build(keyframes);
+  Times times;
+  const bool defer = state.range(1) != 0;
+  int64_t version = 2;
+  for (auto _ : state) {
+    state.PauseTiming();
+    MapUpdate snapshot;
+    snapshot.version = version++;
+    snapshot.is_snapshot = true;
+    snapshot.acked_below = keyframes;
+    for (const auto& [id, keyframe] : b.replica->map().keyframes()) snapshot.keyframes.push_back({id, keyframe->T_w_c, 0});
+    for (const auto& [id, point] : b.replica->map().points()) {
+      MapPointData data = point.data();
+      data.p_w += Vec3(0, 0.001, 0);
+      snapshot.points.push_back(data);
+    }
+    state.ResumeTiming();
+    timedApply(b.replica.get(), snapshot, defer, &times);
+  }
+  report(state, "a snapshot", keyframes, defer, times);
+}
+
+// Many keyframes culled in one delta, as after a join where two parts overlap: 'culled' cold
+// keyframes, half of each one's points re-described by a keyframe that stays (the mapper
+// keeps points measured elsewhere), the other half removed. Once per built map.
+void BM_ApplyBulkCull(benchmark::State& state) {
+  const int keyframes = static_cast<int>(state.range(0)), culled = static_cast<int>(state.range(1));
+  Times times;
+  const bool defer = state.range(2) != 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    Built b = build(keyframes);
+    MapUpdate delta;
+    delta.version = 2;
+    delta.acked_below = keyframes;
+    for (KeyframeId id = 1; id <= culled; ++id) {
+      delta.removed_keyframes.push_back(id);
+      const KeyframeId keeper = culled + 1 + id % (keyframes - culled - 1);
+      bool keep = true;
+      for (PointId pid : b.replica->describedBy(id)) {
+        const MapPoint& point = *b.replica->map().point(pid);
+        if (keep) {
+          delta.points.push_back(MapPointData{pid, point.p_w, keeper, point.source_uv, 0});
+        } else {
+          delta.removed_points.push_back(pid);
+        }
+        keep = !keep;
+      }
+    }
+    state.ResumeTiming();
+    timedApply(b.replica.get(), delta, defer, &times);
+    state.PauseTiming();
+    b = Built{};
+    state.ResumeTiming();
+  }
+  report(state, "a delta culling " + std::to_string(culled) + " keyframes", keyframes, defer, times);
 }
 
 }  // namespace
 
-BENCHMARK(BM_ApplyCull)->Arg(120)->Arg(300)->Unit(benchmark::kMillisecond)->Iterations(60);
-BENCHMARK(BM_ApplyMoveAll)->Arg(120)->Arg(300)->Unit(benchmark::kMillisecond)->Iterations(10);
+BENCHMARK(BM_ApplyCull)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(60);
+BENCHMARK(BM_ApplyMoveAll)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
+BENCHMARK(BM_ApplySnapshot)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
+BENCHMARK(BM_ApplyBulkCull)->Args({300, 100, 0})->Args({300, 100, 1})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK_MAIN();
