@@ -252,8 +252,10 @@ void TrackerNode::trackFrame(const Received& received) {
     frame_log_.write(result, keyframe_in_pose, FrameLog::Times{0.0, result.pose.latency_ms});
     if (relocalise) {
       // The frame is answered: map versions waiting go in now, while the tracker is this
-      // thread's (else, lost, they would wait for a poll that finds no relocalisation running).
+      // thread's (else, lost, they would wait for a poll that finds no relocalisation running),
+      // and the work held back from them (a lost tracker may relocalise for a long time).
       while (!pending_maps_.empty()) applyOldestMap();
+      if (deferred_map_work_) deferred_map_work_ = tracker_.applyDeferredMap(SIZE_MAX);
       startRelocalisation();
     }
     return;

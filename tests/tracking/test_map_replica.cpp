@@ -348,14 +348,12 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
   ASSERT_TRUE(whole->apply(delta));
   check_hot("at once");
   EXPECT_TRUE(replica->hasDeferred());
-  EXPECT_EQ(replica->map().point(4)->source_keyframe, 1) << "waits";
-  EXPECT_NE(replica->map().point(8), nullptr) << "waits";
-  EXPECT_TRUE(replica->map().hasKeyframe(1)) << "waits";
-  std::vector<KeyframeId> culled;
-  int steps = 0;
-  while (replica->applyDeferred(2, &culled) > 0) ASSERT_LT(++steps, 100);
-  EXPECT_GE(steps, 1) << "done a few entries a call";
-  EXPECT_EQ(culled, std::vector<KeyframeId>{1});
+  EXPECT_FALSE(replica->map().hasKeyframe(1)) << "culled at once";
+  EXPECT_EQ(replica->map().point(4)->source_keyframe, 2) << "re-described from the culled keyframe: at once";
+  EXPECT_EQ(replica->map().point(13), nullptr) << "went with keyframe 1";
+  EXPECT_NE(replica->map().point(8), nullptr) << "cold keyframe 2's: waits";
+  for (int steps = 0; replica->applyDeferred(1) > 0;) ASSERT_LT(++steps, 100);
+  EXPECT_EQ(replica->map().point(8), nullptr);
   check_hot("after");
   const auto same = [&](const char* when) {
     ASSERT_EQ(replica->map().numPoints(), whole->map().numPoints()) << when;
@@ -378,7 +376,7 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
     EXPECT_EQ(a, b) << when;
   };
   same("the delta");
-  // A snapshot: every point but 9 and 10 (cold keyframe 2's and hot keyframe 0's: culled),
+  // A snapshot: every point but 9 and 11 (hot keyframe 0's and cold keyframe 2's: culled),
   // each moved. Work left from it is done first by the next version.
   MapUpdate snapshot;
   snapshot.version = 3;
@@ -386,7 +384,7 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
   snapshot.acked_below = 3;
   for (const auto& [id, kf] : whole->map().keyframes()) snapshot.keyframes.push_back({id, kf->T_w_c, 0});
   for (const auto& [id, point] : whole->map().points()) {
-    if (id == 9 || id == 10) continue;
+    if (id == 9 || id == 11) continue;
     MapPointData data = point.data();
     data.p_w.z() += 0.25;
     snapshot.points.push_back(data);
@@ -396,8 +394,11 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
   ASSERT_TRUE(replica->apply(snapshot, /*defer_cold=*/true));
   ASSERT_TRUE(whole->apply(snapshot));
   EXPECT_EQ(replica->map().point(9), nullptr) << "hot: at once";
-  EXPECT_NE(replica->map().point(11), nullptr);
+  EXPECT_NE(replica->map().point(11), nullptr) << "cold: waits";
+  EXPECT_NE(replica->map().point(14)->p_w.z(), whole->map().point(14)->p_w.z()) << "cold: waits";
+  EXPECT_EQ(replica->map().point(12)->p_w.z(), whole->map().point(12)->p_w.z()) << "hot: at once";
   EXPECT_TRUE(replica->hasDeferred());
+  ASSERT_GT(replica->applyDeferred(5), 0u) << "a step of 5 entries leaves some";
   MapUpdate next;
   next.version = 4;
   ASSERT_TRUE(replica->apply(next, /*defer_cold=*/true));

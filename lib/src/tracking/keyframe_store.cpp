@@ -111,6 +111,26 @@ void KeyframeStore::remove(KeyframeId id) {
   for (Kind kind : {Kind::kImage, Kind::kExtras, Kind::kMessage}) remove(id, kind);
 }
 
+void KeyframeStore::removeLater(KeyframeId id) {
+  for (Kind kind : {Kind::kImage, Kind::kExtras, Kind::kMessage}) {
+    const auto it = index_.find(key(id, kind));
+    if (it == index_.end()) continue;
+    queued_.push_back(it->second);
+    live_bytes_ -= it->second.size;
+    --kind_entries_[static_cast<size_t>(kind)];
+    index_.erase(it);
+    full_ = false;
+  }
+}
+
+size_t KeyframeStore::releaseQueued(size_t max) {
+  for (size_t done = 0; done < max && !queued_.empty(); ++done) {
+    release(queued_.back());
+    queued_.pop_back();
+  }
+  return queued_.size();
+}
+
 void KeyframeStore::remove(KeyframeId id, Kind kind) {
   const auto it = index_.find(key(id, kind));
   if (it == index_.end()) return;
@@ -123,6 +143,7 @@ void KeyframeStore::remove(KeyframeId id, Kind kind) {
 
 void KeyframeStore::clear() {
   index_.clear();
+  queued_.clear();  // the file is cut below: those bytes go with it
   kind_entries_ = {};
   live_bytes_ = 0;
   full_ = false;

@@ -13,11 +13,12 @@ namespace {
 // Added to every keyframe's bounding radius: the culling that relies on it must never miss a
 // point to rounding.
 constexpr double kBoundsSlackM = 1e-6;
-// What a culled keyframe counts for in applyDeferred()'s entries, besides one per point: its
-// entries in the keyframe store, each a hole punched in the store's file (0.19 ms median,
-// 0.62 ms p99 on the development machine's ext4, against 1-2 us for a point). Counted as one
-// entry, a step of 200 culled 24 ms' worth on the 10-minute flight.
-constexpr size_t kCulledKeyframeEntries = 100;
+// What a hole punched in the keyframe store's file (KeyframeStore::removeLater) counts for in
+// applyDeferred()'s entries, against one per point: 0.19 ms median, 0.62 ms p99 on the
+// development machine's ext4, against 1-2 us for a point. Counted as one entry, a step of
+// 200 took up to 24 ms on the 10-minute flight, where the mapper culls 35-126 keyframes at
+// once after a join.
+constexpr size_t kStoreReleaseEntries = 100;
 }  // namespace
 
 void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -284,11 +285,18 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       }
     }
   }
+  // A point re-described from a keyframe culled now is put now: the cull below would take
+  // it (and its depth record) with the keyframe.
+  const std::unordered_set<KeyframeId> culled(update.removed_keyframes.begin(), update.removed_keyframes.end());
+  const auto culled_source = [&](PointId id) {
+    const MapPoint* before = map_.point(id);
+    return before && culled.count(before->source_keyframe) > 0;
+  };
   for (const MapPointData& p : update.points) {
     const Keyframe* source = map_.keyframe(p.source_keyframe);
     if (!source) {
       unknown = true;
-    } else if (source->cold() && slotless(p.id)) {
+    } else if (source->cold() && slotless(p.id) && !culled_source(p.id)) {
       deferred_.points.push_back(p);
     } else {
       putPointAndSlot(p);
@@ -310,51 +318,49 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       removePoint(id);
     }
   }
+  // Culled keyframes go at once (the tracker's parts, anchor and bag of words follow the
+  // keyframes), their store entries' bytes later.
   for (KeyframeId id : update.removed_keyframes) {
     // The mapper culls only keyframes it has integrated, never keyframe 0: a message naming
     // another is refused for it (this keyframe would never come back to the replica).
-    const Keyframe* keyframe = map_.keyframe(id);
     if (id == 0 || id >= acked_below_) {
-      unknown = unknown || keyframe;
-    } else if (keyframe && keyframe->cold() && defer_cold) {
-      deferred_.removed_keyframes.push_back(id);
+      unknown = unknown || map_.hasKeyframe(id);
     } else {
-      removeKeyframe(id);
+      removeKeyframe(id, /*store_later=*/defer_cold);
     }
   }
   return !unknown;
 }
 
 bool MapReplica::Deferred::empty() const {
-  return gone_in.size() == next_gone && points.size() == next_point && removed_points.size() == next_removed_point &&
-         removed_keyframes.size() == next_removed_keyframe;
+  return gone_in.size() == next_gone && points.size() == next_point && removed_points.size() == next_removed_point;
 }
 
-// In the order apply() would have taken them: a snapshot's culled points, then the points,
-// the removed points and the culled keyframes.
-size_t MapReplica::applyDeferred(size_t max_entries, std::vector<KeyframeId>* removed_keyframes) {
+// In the order apply() would have taken them: a snapshot's culled points, the points, the
+// removed points; then the keyframe store's holes.
+size_t MapReplica::applyDeferred(size_t max_entries) {
   Deferred& d = deferred_;
   size_t done = 0;
   for (; done < max_entries && d.next_gone < d.gone_in.size(); ++d.next_gone) {
     done += removeAbsentPoints(d.gone_in[d.next_gone]);
   }
   for (; done < max_entries && d.next_point < d.points.size(); ++d.next_point, ++done) {
-    if (map_.hasKeyframe(d.points[d.next_point].source_keyframe)) putPointAndSlot(d.points[d.next_point]);
+    const MapPointData& p = d.points[d.next_point];
+    if (map_.hasKeyframe(p.source_keyframe)) {
+      putPointAndSlot(p);
+    } else {
+      removePoint(p.id);  // its new source culled since (a whole apply puts it, then culls it)
+    }
   }
   for (; done < max_entries && d.next_removed_point < d.removed_points.size(); ++d.next_removed_point, ++done) {
     removePoint(d.removed_points[d.next_removed_point]);
   }
-  for (; done < max_entries && d.next_removed_keyframe < d.removed_keyframes.size(); ++d.next_removed_keyframe) {
-    const KeyframeId id = d.removed_keyframes[d.next_removed_keyframe];
-    done += kCulledKeyframeEntries + describedBy(id).size();
-    removeKeyframe(id);
-    if (removed_keyframes) removed_keyframes->push_back(id);
-  }
   if (d.empty()) d = Deferred{};  // its memory too
-  return d.empty() ? 0 : 1;
+  if (store_ && done < max_entries) store_->releaseQueued((max_entries - done) / kStoreReleaseEntries + 1);
+  return hasDeferred() ? 1 : 0;
 }
 
-bool MapReplica::hasDeferred() const { return !deferred_.empty(); }
+bool MapReplica::hasDeferred() const { return !deferred_.empty() || (store_ && store_->queued() > 0); }
 
 void MapReplica::putPointAndSlot(const MapPointData& p) {
   const MapPoint* before = map_.point(p.id);
@@ -388,7 +394,7 @@ size_t MapReplica::removeAbsentPoints(KeyframeId id) {
 // slot order, as in freeze(): removing a slot moves the last one into its place, so the
 // order decides the slots' (the search's) order after it; the slotless ones (a cold
 // keyframe's) leave the slots as they are.
-void MapReplica::removeKeyframe(KeyframeId id) {
+void MapReplica::removeKeyframe(KeyframeId id, bool store_later) {
   if (!map_.hasKeyframe(id)) return;
   std::vector<std::pair<size_t, PointId>> described;
   for (PointId pid : describedBy(id)) {
@@ -400,7 +406,11 @@ void MapReplica::removeKeyframe(KeyframeId id) {
   for (const auto& [index, pid] : described) removePoint(pid);
   bounds_.erase(id);
   map_.removeKeyframe(id);
-  if (store_) store_->remove(id);
+  if (store_ && store_later) {
+    store_->removeLater(id);
+  } else if (store_) {
+    store_->remove(id);
+  }
 }
 
 }  // namespace rgbdslam

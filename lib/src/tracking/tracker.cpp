@@ -245,11 +245,12 @@ class Tracker::Impl {
 
   bool applyMap(const MapUpdate& update, bool defer_cold) {
     reanchorBeforeCull(update.removed_keyframes);
-    std::vector<KeyframeId> culled_before;  // held back from the versions before: done first
-    replica_.applyDeferred(SIZE_MAX, &culled_before);
     const bool known = replica_.apply(update, defer_cold);
-    if (update.is_snapshot || !update.removed_keyframes.empty() || !culled_before.empty()) {  // keyframes the mapper culled
-      forgetCulledKeyframes();
+    if (update.is_snapshot || !update.removed_keyframes.empty()) {  // keyframes the mapper culled
+      for (auto it = extras_.begin(); it != extras_.end();) {
+        it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
+      }
+      extras_cache_.clear();
       for (KeyframeId id : update.removed_keyframes) {
         if (id >= 0 && id <= INT_MAX) bow_index_.remove(static_cast<int>(id));
       }
@@ -267,19 +268,7 @@ class Tracker::Impl {
     followMapCorrection(/*joined=*/part_ != part_before);
     return known;
   }
-  bool applyDeferredMap(size_t max_entries) {
-    std::vector<KeyframeId> culled;
-    const bool left = replica_.applyDeferred(max_entries, &culled) > 0;
-    if (!culled.empty()) forgetCulledKeyframes();
-    return left;
-  }
-  // Relocalisation's features of keyframes no longer in the replica.
-  void forgetCulledKeyframes() {
-    for (auto it = extras_.begin(); it != extras_.end();) {
-      it = replica_.map().hasKeyframe(it->first) ? std::next(it) : extras_.erase(it);
-    }
-    extras_cache_.clear();
-  }
+  bool applyDeferredMap(size_t max_entries) { return replica_.applyDeferred(max_entries) > 0; }
   const Map& map() const { return replica_.map(); }
   const KeyframeStore* keyframeStore() const { return store_.get(); }
   const Status& keyframeStoreStatus() const { return store_status_; }

@@ -52,6 +52,14 @@ class KeyframeStore {
   Expected<std::vector<uint8_t>> get(KeyframeId id, Kind kind);
   void remove(KeyframeId id);  // every kind
   void remove(KeyframeId id, Kind kind);
+  // As remove(id), but the bytes are given back by releaseQueued(): a punched hole costs 0.2
+  // ms (0.6 ms p99 on ext4), and a map version can cull a hundred keyframes at once. The
+  // entries are gone at once (has() is false); offsets only grow, so nothing is written
+  // where a queued hole will be punched.
+  void removeLater(KeyframeId id);
+  // Punches up to 'max' of the queued holes; returns how many are left.
+  size_t releaseQueued(size_t max);
+  size_t queued() const { return queued_.size(); }
   void clear();
 
   size_t entries() const { return index_.size(); }
@@ -74,6 +82,7 @@ class KeyframeStore {
     return static_cast<uint64_t>(id) * kKinds + static_cast<uint8_t>(kind);  // ids are >= 0
   }
   void release(const Entry& entry);
+  std::vector<Entry> queued_;  // removed later (removeLater), not yet given back
 
   int fd_ = -1;
   int64_t block_ = 4096;  // the file system's block [bytes]; entries start on one

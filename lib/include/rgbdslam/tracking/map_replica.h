@@ -14,6 +14,9 @@
 //   other than keyframe 0; any other named is kept and reported as unknown) (listed in a delta, and
 //   all of them in a snapshot) go last, with any point still described by them; a keyframe
 //   merely absent from a snapshot stays (a mapper that lost its journal has not had it again yet). Entries that name keyframes the replica lacks are skipped.
+//   rgbd-tracker applies with defer_cold: the work on cold keyframes' points (most of a
+//   snapshot's or a join's) and the store's holes for culled keyframes wait, and
+//   applyDeferred() does them in steps between frames (docs/design.md, "Map protocol").
 //   updateLocalMap(wanted): the local map. The keyframes nearest the camera keep their
 //   pyramid ('hot'); the others are 'cold': their level-0 image is kept as JPEG (encoded
 //   once), the pyramid freed, and their points lose their slots (the points stay, with their
@@ -88,19 +91,19 @@ class MapReplica {
   void addAcknowledgedPoint(const MapPoint& point);
   // Returns false when entries named keyframes the replica lacks (they were skipped).
   // defer_cold: the work on points without a slot (a cold keyframe's, not searched: put,
-  // re-described, removed, or absent from a snapshot) and on culled cold keyframes is held
-  // back for applyDeferred(), so that the tracking thread can spread it over the time
-  // between frames (issue 10, item 6); what the search uses (every keyframe's pose and part,
-  // the points with slots) and every move are applied at once. Any work held back
-  // is done first, whole: map versions go in in order.
+  // re-described, removed, or absent from a snapshot) is held back for applyDeferred(), so
+  // that the tracking thread can spread it over the time between frames (issue 10, item 6),
+  // and so are the holes punched in the keyframe store for culled keyframes. Every
+  // keyframe's pose and part, every move, the points with slots, the points re-described
+  // from a keyframe culled now and the culls themselves are applied at once. Any work held
+  // back is done first, whole: map versions go in in order.
   bool apply(const MapUpdate& update, bool defer_cold = false);
   // Does up to about max_entries of the work held back (a point each; a keyframe looked
-  // through for a snapshot's absent points, one plus its points; a keyframe culled, 100 plus
-  // its points: its store entries are the costly part), in the order apply()
-  // would have; appends the keyframes culled to 'removed_keyframes'. Returns 0 when none is
-  // left. The replica is consistent in between: a keyframe thawed meanwhile gets its slots,
-  // and the work held back then updates them as for any hot keyframe.
-  size_t applyDeferred(size_t max_entries, std::vector<KeyframeId>* removed_keyframes = nullptr);
+  // through for a snapshot's absent points, one plus its points; a hole in the store, 100),
+  // in the order apply() would have. Returns 0 when none is left. The replica is consistent
+  // in between: a keyframe thawed meanwhile gets its slots, and the work held back then
+  // updates them as for any hot keyframe.
+  size_t applyDeferred(size_t max_entries);
   bool hasDeferred() const;
   void clear();
   // Thaws the cold keyframes of 'wanted' (nearest first; at most max_thaws) and freezes hot
@@ -136,7 +139,7 @@ class MapReplica {
   void addSlot(MapPoint* point);
   void removeSlot(PointId id);
   void removePoint(PointId id);
-  void removeKeyframe(KeyframeId id);
+  void removeKeyframe(KeyframeId id, bool store_later = false);  // store_later: KeyframeStore::removeLater
   bool thaw(Keyframe* keyframe);  // the pyramid only: addSlotsOf() then makes the slots
   void addSlotsOf(const std::unordered_set<KeyframeId>& keyframes);
   void freeze(Keyframe* keyframe, int jpeg_quality);
@@ -155,8 +158,7 @@ class MapReplica {
     std::vector<KeyframeId> gone_in;  // keyframes whose points absent from 'kept' go
     std::vector<MapPointData> points;
     std::vector<PointId> removed_points;
-    std::vector<KeyframeId> removed_keyframes;
-    size_t next_gone = 0, next_point = 0, next_removed_point = 0, next_removed_keyframe = 0;
+    size_t next_gone = 0, next_point = 0, next_removed_point = 0;
     bool empty() const;
   };
   Deferred deferred_;
