@@ -50,6 +50,13 @@ struct TrackerProcessOptions {
   // answered lost at once (tracker_node.h); false: on the tracking thread, each relocalised
   // frame's pose as late as its relocalisation.
   bool relocalise_off_frame_path = true;
+  // A map version's work on cold keyframes' points and the store's holes for culled
+  // keyframes held back and done 200 entries a step between frames (MapReplica::apply
+  // defer_cold). Off by default: with it the corridor's new part after a 5 s cover
+  // (tests/integration/test_suite_new_part.sh) was lost again at frame 215 in 4 of 12 runs
+  // (1 of 4 without it, at 294, beside another test), not explained yet (docs/open_work.md,
+  // session 34).
+  bool defer_cold_map_work = false;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
   // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma

@@ -22,9 +22,10 @@ constexpr double kMaxMapWaitMs = 100.0;
 // ...and when this many wait, the oldest is applied as the next arrives: a flood of map
 // messages holds no more than this many decoded.
 constexpr size_t kMaxPendingMaps = 8;
-// A map version's work on cold keyframes' points is held back (Tracker::applyMap) and done
-// this many entries at a time (0.1-0.5 ms on one core) while no frame waits: a snapshot or a
-// join's cull took 18-52 ms in one block between frames on the 10-minute flight.
+// With tracker_node.defer_cold_map_work, a map version's work on cold keyframes' points is
+// held back (Tracker::applyMap) and done this many entries at a time (0.1-0.5 ms on one core)
+// while no frame waits: a snapshot or a join's cull took 18-52 ms in one block between frames
+// on the 10-minute flight.
 constexpr size_t kDeferredMapEntries = 200;
 
 double msBetween(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
@@ -408,8 +409,8 @@ void TrackerNode::applyMap(const MapUpdate& update) {
   const auto now = Clock::now();
   const MapReceiveResult r = sync_.receive(update, steadyUs(now), [this](const MapUpdate& u) {
     const auto start = Clock::now();
-    const bool known = tracker_.applyMap(u, /*defer_cold=*/true);
-    deferred_map_work_ = true;  // perhaps: the next applyDeferredMap() says
+    const bool known = tracker_.applyMap(u, options_.process.defer_cold_map_work);
+    deferred_map_work_ = options_.process.defer_cold_map_work;  // perhaps: the next applyDeferredMap() says
     map_apply_ms_.add(msBetween(start, Clock::now()));
     return known;
   });
