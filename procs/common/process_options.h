@@ -53,9 +53,9 @@ struct TrackerProcessOptions {
   // A map version's work on cold keyframes' points and the store's holes for culled
   // keyframes held back and done 200 entries a step between frames (MapReplica::apply
   // defer_cold). Off by default: with it the corridor's new part after a 5 s cover
-  // (tests/integration/test_suite_new_part.sh) was lost again at frame 215 in 4 of 12 runs
-  // (1 of 4 without it, at 294, beside another test), not explained yet (docs/open_work.md,
-  // session 34).
+  // (tests/integration/test_suite_new_part.sh) was lost again, 215 frames posed, in 5 of 15
+  // runs (1 of 6 without it, 294 posed, beside another test), not explained yet
+  // (docs/open_work.md, session 34).
   bool defer_cold_map_work = false;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
