@@ -130,8 +130,8 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
 // Handles everything that has arrived (frames into the backlog, map versions decoded and
 // queued), then tracks the oldest frame of the backlog; map versions are applied when no
 // frame waits, or once they have waited kMaxMapWaitMs (issue 10, item 6: a frame does not
-// wait for a map update), their work on cold keyframes held back and done
-// kDeferredMapEntries at a time while no frame waits.
+// wait for a map update); with tracker_node.defer_cold_map_work their work on cold keyframes
+// is held back and done kDeferredMapEntries at a time while no frame waits.
 void TrackerNode::handleAvailable(int timeout_ms) {
   const int count = local_ == link_ ? 1 : 2;
   for (int round = 0; round < kMaxHandlePerLoop; ++round) {
