@@ -23,8 +23,8 @@
 //     on its way). Below what was published when the previous receipt came, not merely now:
 //     a version published just before a receipt may still be on its way or waiting behind a
 //     frame, and a tracker in step was asked a snapshot that way 8 times over the 10-minute
-//     flight through the suite (no delta lost; each snapshot 18-45 ms of the tracking
-//     thread's time at 31 000-46 000 points).
+//     flight through the suite (no delta lost; each snapshot 7.5-45.5 ms of the tracking
+//     thread's time at 15 000-47 000 points).
 //   - A receipt that claims a version this publisher never published comes from a tracker
 //     that holds versions of a mapper run whose journal was cut short (a corrupt record):
 //     the versions go on after the tracker's, with a snapshot, so that the tracker takes them
