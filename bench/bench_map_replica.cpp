@@ -159,32 +159,30 @@ void BM_ApplyCull(benchmark::State& state) {
   report(state, "a delta culling one keyframe, 2000 points moved", keyframes, defer, times);
 }
 
-void BM_ApplyMoveAll(benchmark::State& state) {
-  const int keyframes = static_cast<int>(state.range(0));
-  Built b = build(keyframes);
-  Times times;
-  const bool defer = state.range(1) != 0;
-  int64_t version = 2;
-  for (auto _ : state) {
-    state.PauseTiming();
-    MapUpdate delta;
-    delta.version = version++;
-    delta.acked_below = keyframes;
-    for (const auto& [id, keyframe] : b.replica->map().keyframes()) {
-      delta.keyframes.push_back({id, SE3(Mat3::Identity(), Vec3(0, 0.001, 0)) * keyframe->T_w_c, 0});
-    }
-    for (const auto& [id, point] : b.replica->map().points()) {
-      delta.moved_points.push_back(PointPosition{id, point.p_w + Vec3(0, 0.001, 0)});
-    }
-    state.ResumeTiming();
-    timedApply(b.replica.get(), delta, defer, &times);
+// Every keyframe and point of the replica nudged 1 mm along y: as moves in a delta (a loop
+// closure or a join), or in full in a snapshot.
+MapUpdate everything(const MapReplica& replica, int64_t version, bool snapshot) {
+  MapUpdate update;
+  update.version = version;
+  update.is_snapshot = snapshot;
+  update.acked_below = replica.map().keyframes().rbegin()->first + 1;
+  const Vec3 nudge(0, 0.001, 0);
+  for (const auto& [id, keyframe] : replica.map().keyframes()) {
+    update.keyframes.push_back({id, SE3(Mat3::Identity(), nudge) * keyframe->T_w_c, 0});
   }
-  report(state, "a delta moving every keyframe and point", keyframes, defer, times);
+  for (const auto& [id, point] : replica.map().points()) {
+    if (!snapshot) {
+      update.moved_points.push_back(PointPosition{id, point.p_w + nudge});
+      continue;
+    }
+    MapPointData data = point.data();
+    data.p_w += nudge;
+    update.points.push_back(data);
+  }
+  return update;
 }
 
-// The mapper's whole map (after a lost delta, or its fallback every 30 s): every keyframe
-// and point, the points nudged.
-void BM_ApplySnapshot(benchmark::State& state) {
+void applyEverything(benchmark::State& state, bool snapshot) {
   const int keyframes = static_cast<int>(state.range(0));
   Built b = build(keyframes);
   Times times;
@@ -192,21 +190,16 @@ void BM_ApplySnapshot(benchmark::State& state) {
   int64_t version = 2;
   for (auto _ : state) {
     state.PauseTiming();
-    MapUpdate snapshot;
-    snapshot.version = version++;
-    snapshot.is_snapshot = true;
-    snapshot.acked_below = keyframes;
-    for (const auto& [id, keyframe] : b.replica->map().keyframes()) snapshot.keyframes.push_back({id, keyframe->T_w_c, 0});
-    for (const auto& [id, point] : b.replica->map().points()) {
-      MapPointData data = point.data();
-      data.p_w += Vec3(0, 0.001, 0);
-      snapshot.points.push_back(data);
-    }
+    const MapUpdate update = everything(*b.replica, version++, snapshot);
     state.ResumeTiming();
-    timedApply(b.replica.get(), snapshot, defer, &times);
+    timedApply(b.replica.get(), update, defer, &times);
   }
-  report(state, "a snapshot", keyframes, defer, times);
+  report(state, snapshot ? "a snapshot" : "a delta moving every keyframe and point", keyframes, defer, times);
 }
+
+void BM_ApplyMoveAll(benchmark::State& state) { applyEverything(state, false); }
+// The mapper's whole map (after a lost delta, or its fallback every 30 s).
+void BM_ApplySnapshot(benchmark::State& state) { applyEverything(state, true); }
 
 // Many keyframes culled in one delta, as after a join where two parts overlap: 'culled' cold
 // keyframes, half of each one's points re-described by a keyframe that stays (the mapper
