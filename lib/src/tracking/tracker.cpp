@@ -583,8 +583,12 @@ class Tracker::Impl {
   // Every keyframe's bag of words, for the relocalisation shortlist (indexed when its extras
   // go cold, or at the first loss on a large map). The vocabulary is trained on a thread of
   // its own (~1.5 s, once per process) once the map has half the shortlist's keyframes, so
-  // that the first loss does not wait for it (a loss before it is done waits, once);
-  // vocabulary_ready_ tells the keyframe worker.
+  // that the first loss does not wait for it, or at the first loss (relocalise()): a map the
+  // mapper's culls kept under half the shortlist (the corridor's 16 keyframes) otherwise
+  // trained it in a new part's first try to rejoin, on the tracking thread (finishFrame):
+  // 3.1-3.9 s, 30 frames skipped and the new part lost (test_suite_new_part, 2 of 24 runs).
+  // A use before the training is done waits for it; vocabulary_ready_ tells the keyframe
+  // worker.
   BowIndex bow_index_;
   std::future<void> vocabulary_warmup_;
   std::shared_ptr<std::atomic<bool>> vocabulary_ready_ = std::make_shared<std::atomic<bool>>(false);
@@ -1031,6 +1035,10 @@ Attempt Tracker::Impl::relocaliseFrom(const RelocaliseStart& start, const RgbdFr
 }
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
+  // Lost: bags of words are wanted from now on (a shortlist, a new part's tries to rejoin the
+  // part it left), whatever the map's size. Trained off this thread, while the relocalisation
+  // goes on without them on a small map.
+  warmUpVocabulary();
   const int wanted = std::max(options_.relocalise_candidates, options_.reloc_features.candidates);
   std::optional<Features3d> features;       // the frame's ORB features, extracted at most once
   std::vector<KeyframeId> feature_candidates;
