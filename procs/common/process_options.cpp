@@ -45,8 +45,7 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "always found in line)");
   r->bind(s, "defer_cold_map_work", &defer_cold_map_work,
           "apply a map version's work on cold keyframes' points (and the keyframe store's holes for "
-          "culled keyframes) in steps of 200 entries between frames, not in one block (off: see "
-          "docs/open_work.md, session 34)");
+          "culled keyframes) in steps of 200 entries between frames, not in one block");
   r->bind(s, "keyframe_grey", &keyframe_encoding.jpeg_grey, {{"jpeg", true}, {"png", false}},
           "keyframe image on the link (png is lossless)");
   r->bind(s, "keyframe_jpeg_quality", &keyframe_encoding.jpeg_quality, 1, 100, "",

@@ -52,11 +52,12 @@ struct TrackerProcessOptions {
   bool relocalise_off_frame_path = true;
   // A map version's work on cold keyframes' points and the store's holes for culled
   // keyframes held back and done 200 entries a step between frames (MapReplica::apply
-  // defer_cold). Off by default: with it the corridor's new part after a 5 s cover
-  // (tests/integration/test_suite_new_part.sh) was lost again, 215 frames posed, in 5 of 15
-  // runs (1 of 6 without it, 294 posed, beside another test), not explained yet
-  // (docs/open_work.md, session 34).
-  bool defer_cold_map_work = false;
+  // defer_cold): a join's cull or a snapshot no longer holds the tracking thread for up to
+  // 40 ms. It was off while the corridor's new part after a 5 s cover
+  // (tests/integration/test_suite_new_part.sh) was lost again in 5 of 15 runs with it: that
+  // was a vocabulary trained on the tracking thread, with or without it (Tracker::relocalise
+  // now starts the training at the loss; 20 of 20 runs passed with it on after that).
+  bool defer_cold_map_work = true;
   // Keyframes on the link: JPEG grey, depth at every 4th pixel and row.
   KeyframeEncoding keyframe_encoding{/*jpeg_grey=*/true, /*jpeg_quality=*/75, /*depth_step=*/4};
   // ...the depth as inverse depth in steps of this fraction of the noise model's depth sigma

@@ -14,7 +14,7 @@
 //   other than keyframe 0; any other named is kept and reported as unknown) (listed in a delta, and
 //   all of them in a snapshot) go last, with any point still described by them; a keyframe
 //   merely absent from a snapshot stays (a mapper that lost its journal has not had it again yet). Entries that name keyframes the replica lacks are skipped.
-//   With tracker_node.defer_cold_map_work (off by default), rgbd-tracker applies with
+//   With tracker_node.defer_cold_map_work (on by default), rgbd-tracker applies with
 //   defer_cold: the work on cold keyframes' points (most of a
 //   snapshot's or a join's) and the store's holes for culled keyframes wait, and
 //   applyDeferred() does them in steps between frames (docs/design.md, "Map protocol").
