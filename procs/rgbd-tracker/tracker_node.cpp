@@ -263,7 +263,7 @@ void TrackerNode::trackFrame(const Received& received) {
   }
   // After the pose is out: the keyframe, the local map (tracker.h, trackPose).
   const auto start = Clock::now();
-  std::optional<KeyframeData> keyframe = tracker_.finishFrame();
+  std::optional<KeyframeData> keyframe = tracker_.finishFrame(/*real_time=*/true);
   const double after_pose_ms = msBetween(start, Clock::now());
   after_pose_ms_.add(after_pose_ms);
   frame_log_.write(result, keyframe_in_pose || keyframe.has_value(), FrameLog::Times{after_pose_ms, result.pose.latency_ms});

@@ -224,7 +224,7 @@ class Tracker::Impl {
 
   // In the order track() always did them: the keyframe first, then the local map around
   // the frame's pose (with the new keyframe in it).
-  std::optional<KeyframeData> finishFrame() {
+  std::optional<KeyframeData> finishFrame(bool real_time = false) {
     std::optional<KeyframeData> data;
     if (pending_keyframe_) {
       data = addKeyframe(std::move(*pending_keyframe_));
@@ -235,7 +235,7 @@ class Tracker::Impl {
       pending_local_map_.reset();
     }
     if (rejoin_frame_) {
-      tryRejoin(*rejoin_frame_);
+      tryRejoin(*rejoin_frame_, real_time);
       rejoin_frame_.reset();
     }
     return data;
@@ -279,7 +279,9 @@ class Tracker::Impl {
   void load(const LoadedMap& loaded, bool add_keyframes);
 
   void reset() {
-    countColdInView();  // before the replica changes
+    cold_count_.pending = false;  // the last projection's counts are for the map forgotten here
+    points_in_view_.clear();
+    views_.clear();
     replica_.clear();
     state_ = TrackingState::kInitialising;
     T_c_w_ = SE3();
@@ -330,7 +332,9 @@ class Tracker::Impl {
   // against the keyframes of the part it was lost in, one try a frame (RejoinRound): a camera
   // back in mapped space goes on in that part (its pose moved there, the published one taking
   // the difference in at correction_rate_*) instead of mapping it again.
-  void tryRejoin(const RgbdFrame& frame);
+  // real_time: a round's first try, which wants bags of words, is left to a later frame
+  // while the vocabulary is still being trained (Tracker::finishFrame).
+  void tryRejoin(const RgbdFrame& frame, bool real_time);
   // How far from where it was lost in the part it left the camera can be by 'frame' [m].
   double rejoinReachM(const RgbdFrame& frame) const;
   // The tracker is in 'part' now; back in the part it had left (or in the map's first part),
@@ -872,7 +876,7 @@ std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std:
   return result;
 }
 
-void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
+void Tracker::Impl::tryRejoin(const RgbdFrame& frame, bool real_time) {
   if (!part_left_ || !options_.reloc_features.enabled) return;
   const Map& map = replica_.map();
   // Only into the part the camera was lost in: where it was lost is known in that part's
@@ -888,6 +892,10 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame) {
   const SE3 T_c_w_before = T_c_w_;
   std::optional<Attempt> attempt;
   if (!rejoin_round_) {
+    if (real_time && !vocabulary_ready_->load()) {
+      warmUpVocabulary();
+      if (vocabulary_warmup_.valid()) return;  // training: the try after the next rejoin_every_frames
+    }
     ++rejoin_tries_;
     // Only keyframes of that part that may see where the camera can be: within the reach
     // plus the depth range of where it was lost (as relocalise() bounds its candidates), and
@@ -1052,10 +1060,10 @@ Attempt Tracker::Impl::relocaliseFrom(const RelocaliseStart& start, const RgbdFr
 }
 
 TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
-  // Lost: bags of words are wanted from now on (a shortlist, a new part's tries to rejoin the
-  // part it left), whatever the map's size. Trained off this thread, while the relocalisation
-  // goes on without them on a small map.
-  warmUpVocabulary();
+  // Lost where a new part may start: its tries to rejoin the part it left want bags of
+  // words, whatever the map's size (a large map's shortlist has them already). Trained off
+  // this thread, while the relocalisation goes on without them on a small map.
+  if (options_.new_part_after_failures > 0 && keyframes_allowed_) warmUpVocabulary();
   const int wanted = std::max(options_.relocalise_candidates, options_.reloc_features.candidates);
   std::optional<Features3d> features;       // the frame's ORB features, extracted at most once
   std::vector<KeyframeId> feature_candidates;
@@ -1755,7 +1763,10 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
 // came back to. Only keyframes whose points' bounding sphere may be in view are looked at.
 // Counted once, when wanted: at every projection (two or more a frame) this was 1.9-3.1 ms
 // a projection late in the 10-minute flight (10 000-16 000 points of ~100 cold keyframes),
-// on the pose's path; now it is after the pose (finishFrame's updateLocalMap).
+// on the pose's path. Now a tracked frame's count is made after its pose (finishFrame's
+// updateLocalMap); while lost, a candidate's thaws count the previous candidate's
+// projection (relocaliseFrom); on a map within the window (updateLocalMap returns first)
+// it is made, if at all, by the next change to the replica (a map version, a keyframe).
 void Tracker::Impl::countColdInView() {
   if (!cold_count_.pending) return;
   cold_count_.pending = false;
@@ -1900,7 +1911,7 @@ Tracker::Tracker(const PinholeCamera& camera, const TrackerOptions& options, Sla
 Tracker::~Tracker() = default;
 TrackResult Tracker::track(const RgbdFrame& frame) { return impl_->track(frame); }
 TrackResult Tracker::trackPose(const RgbdFrame& frame) { return impl_->trackPose(frame); }
-std::optional<KeyframeData> Tracker::finishFrame() { return impl_->finishFrame(); }
+std::optional<KeyframeData> Tracker::finishFrame(bool real_time) { return impl_->finishFrame(real_time); }
 TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(frame); }
 void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); }
 bool Tracker::lost() const { return impl_->lost(); }

@@ -321,9 +321,13 @@ class Tracker {
   // coming back), and returns the keyframe. Call it before anything else (applyMap, the
   // next frame); work left undone is done at the start of the next trackPose(), and a
   // keyframe made there comes in its new_keyframe, so none is lost. track() is the two in
-  // one call, in the same order, with the same results.
+  // one call, in the same order, with the same results. real_time (rgbd-tracker's frame
+  // path): a new part's first try of a round to rejoin the part it left, which wants the
+  // bag-of-words vocabulary, is left to a later frame while the vocabulary is being trained
+  // (1.5-4 s, started at the loss) instead of waiting for it; false waits (the same
+  // results whatever the timing: batch runs, the relocaliser thread).
   TrackResult trackPose(const RgbdFrame& frame);
-  std::optional<KeyframeData> finishFrame();
+  std::optional<KeyframeData> finishFrame(bool real_time = false);
   // While lost, a real-time caller that already holds a newer frame passes this one
   // instead of tracking it: no relocalisation is tried on it (the newer frame's is; a
   // relocalisation takes longer than a frame on a large map, and every frame queued behind
