@@ -117,7 +117,14 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       finishing_since = Clock::time_point{};
       continue;
     }
-    if (finishing_since == Clock::time_point{}) finishing_since = now;
+    if (finishing_since == Clock::time_point{}) {
+      // A frame that took longer than the idle time (a stall of this loop) is not the
+      // source's silence: what arrived meanwhile is read first. A 3.9-4.5 s stall once ended
+      // a run's tracker 175 frames before its source did. (Once finishing, ack_wait_s bounds
+      // the wait whatever arrives.)
+      if (!backlog_.empty() || messagesWaiting()) continue;
+      finishing_since = now;
+    }
     if (relocalising()) continue;  // its keyframe, if any, is still to be sent
     if ((sync_.outbox().empty() && encoding_.empty()) || msBetween(finishing_since, now) >= options_.process.ack_wait_s * 1000) break;
   }
@@ -160,6 +167,12 @@ void TrackerNode::handleAvailable(int timeout_ms) {
     deferred_map_work_ = tracker_.applyDeferredMap(kDeferredMapEntries);
     map_deferred_ms_.add(msBetween(start, Clock::now()));
   }
+}
+
+bool TrackerNode::messagesWaiting() const {
+  const int count = local_ == link_ ? 1 : 2;
+  pollfd fds[2] = {{local_->getFileno(), POLLIN, 0}, {link_->getFileno(), POLLIN, 0}};
+  return ::poll(fds, count, 0) > 0;
 }
 
 void TrackerNode::applyOldestMap() {

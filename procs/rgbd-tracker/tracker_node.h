@@ -110,6 +110,7 @@ class TrackerNode {
   void publishReceipt();
   void publishStatus();
   void handleAvailable(int timeout_ms);
+  bool messagesWaiting() const;  // on either LCM socket, not read yet
   // Relocalisation off the frame path: startRelocalisation() hands frame_ (swapped out,
   // so the next frame decodes into other buffers) and tracker_ to relocaliser_;
   // collectRelocalisation() takes the outcome when it is done, or waits for it ('wait'),
