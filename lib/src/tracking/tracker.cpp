@@ -602,12 +602,13 @@ class Tracker::Impl {
   // Every keyframe's bag of words, for the relocalisation shortlist (indexed when its extras
   // go cold, or at the first loss on a large map). The vocabulary is trained on a thread of
   // its own (~1.5 s, once per process) once the map has half the shortlist's keyframes, so
-  // that the first loss does not wait for it, or at the first loss (relocalise()): a map the
-  // mapper's culls kept under half the shortlist (the corridor's 16 keyframes) otherwise
-  // trained it in a new part's first try to rejoin, on the tracking thread (finishFrame):
-  // 3.1-3.9 s, 30 frames skipped and the new part lost (test_suite_new_part, 2 of 24 runs).
-  // A use before the training is done waits for it; vocabulary_ready_ tells the keyframe
-  // worker.
+  // that the first loss does not wait for it, or at the first loss where a new part may
+  // start (relocalise()): a map the mapper's culls kept under 14 keyframes until a new part's
+  // first ones (15-16 at its first try to rejoin, the corridor) otherwise trained it in that
+  // try, on the tracking thread (finishFrame): 3.1-4.5 s, the new part lost
+  // (test_suite_new_part's setting, 3 of 24 runs). A use before the training is done waits
+  // for it (rgbd-tracker's frame path does not: finishFrame's real_time); vocabulary_ready_
+  // tells the keyframe worker.
   BowIndex bow_index_;
   std::future<void> vocabulary_warmup_;
   std::shared_ptr<std::atomic<bool>> vocabulary_ready_ = std::make_shared<std::atomic<bool>>(false);
@@ -1761,8 +1762,9 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
 // The points of cold keyframes have no slot (map_replica.h); those in view at the last
 // projection count for their keyframes, so that the local map thaws the keyframes the camera
 // came back to. Only keyframes whose points' bounding sphere may be in view are looked at.
-// Counted once, when wanted: at every projection (two or more a frame) this was 1.9-3.1 ms
-// a projection late in the 10-minute flight (10 000-16 000 points of ~100 cold keyframes),
+// Counted once, when wanted: at every projection (one or two a frame: two when the coarse
+// stage runs) this was 1.9-3.1 ms a projection late in the 10-minute flight (7 000-16 700
+// points of 57-134 cold keyframes),
 // on the pose's path. Now a tracked frame's count is made after its pose (finishFrame's
 // updateLocalMap); while lost, a candidate's thaws count the previous candidate's
 // projection (relocaliseFrom); on a map within the window (updateLocalMap returns first)

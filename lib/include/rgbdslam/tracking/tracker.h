@@ -324,7 +324,7 @@ class Tracker {
   // one call, in the same order, with the same results. real_time (rgbd-tracker's frame
   // path): a new part's first try of a round to rejoin the part it left, which wants the
   // bag-of-words vocabulary, is left to a later frame while the vocabulary is being trained
-  // (1.5-4 s, started at the loss) instead of waiting for it; false waits (the same
+  // (1.5-4.5 s, started at the loss) instead of waiting for it; false waits (the same
   // results whatever the timing: batch runs, the relocaliser thread).
   TrackResult trackPose(const RgbdFrame& frame);
   std::optional<KeyframeData> finishFrame(bool real_time = false);
