@@ -1764,11 +1764,11 @@ void Tracker::Impl::projectAll(const SE3& T_c_w) {
 // came back to. Only keyframes whose points' bounding sphere may be in view are looked at.
 // Counted once, when wanted: at every projection (one or two a frame: two when the coarse
 // stage runs) this was 1.9-3.1 ms a projection late in the 10-minute flight (7 000-16 700
-// points of 57-134 cold keyframes),
-// on the pose's path. Now a tracked frame's count is made after its pose (finishFrame's
-// updateLocalMap); while lost, a candidate's thaws count the previous candidate's
-// projection (relocaliseFrom); on a map within the window (updateLocalMap returns first)
-// it is made, if at all, by the next change to the replica (a map version, a keyframe).
+// points of 57-134 cold keyframes), on the pose's path. Now a tracked frame's count is made
+// after its pose (finishFrame's updateLocalMap); while lost, a candidate's thaws count the
+// previous candidate's projection (relocaliseFrom); on a map within the window
+// (updateLocalMap returns first) it is made, if at all, by the next change to the replica
+// (a map version, a keyframe).
 void Tracker::Impl::countColdInView() {
   if (!cold_count_.pending) return;
   cold_count_.pending = false;
