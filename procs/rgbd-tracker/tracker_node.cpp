@@ -122,7 +122,7 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
       // source's silence: what arrived meanwhile is read first. A 3.9-4.5 s stall once ended
       // a run's tracker 175 frames before its source did. (Once finishing, ack_wait_s bounds
       // the wait whatever arrives.)
-      if (!backlog_.empty() || messagesWaiting()) continue;
+      if (!backlog_.empty() || pollSockets(0, nullptr)) continue;
       finishing_since = now;
     }
     if (relocalising()) continue;  // its keyframe, if any, is still to be sent
@@ -140,15 +140,14 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
 // wait for a map update); with tracker_node.defer_cold_map_work their work on cold keyframes
 // is held back and done kDeferredMapEntries at a time while no frame waits.
 void TrackerNode::handleAvailable(int timeout_ms) {
-  const int count = local_ == link_ ? 1 : 2;
   for (int round = 0; round < kMaxHandlePerLoop; ++round) {
-    pollfd fds[2] = {{local_->getFileno(), POLLIN, 0}, {link_->getFileno(), POLLIN, 0}};
     // Work held back from a map version goes on at once (not while the relocaliser thread
     // holds the tracker: the loop would only spin).
     const bool wait = round == 0 && backlog_.empty() && !(deferred_map_work_ && !relocalising());
-    if (::poll(fds, count, wait ? timeout_ms : 0) <= 0) break;
-    if (fds[0].revents & POLLIN) local_->handle();
-    if (count == 2 && (fds[1].revents & POLLIN)) link_->handle();
+    std::array<bool, 2> readable{};
+    if (!pollSockets(wait ? timeout_ms : 0, &readable)) break;
+    if (readable[0]) local_->handle();
+    if (readable[1]) link_->handle();
   }
   collectRelocalisation(/*wait=*/false);
   if (!backlog_.empty()) {
@@ -169,10 +168,15 @@ void TrackerNode::handleAvailable(int timeout_ms) {
   }
 }
 
-bool TrackerNode::messagesWaiting() const {
+bool TrackerNode::pollSockets(int timeout_ms, std::array<bool, 2>* readable) const {
   const int count = local_ == link_ ? 1 : 2;
   pollfd fds[2] = {{local_->getFileno(), POLLIN, 0}, {link_->getFileno(), POLLIN, 0}};
-  return ::poll(fds, count, 0) > 0;
+  const bool any = ::poll(fds, count, timeout_ms) > 0;
+  if (readable) {
+    (*readable)[0] = any && (fds[0].revents & POLLIN) != 0;
+    (*readable)[1] = any && count == 2 && (fds[1].revents & POLLIN) != 0;
+  }
+  return any;
 }
 
 void TrackerNode::applyOldestMap() {

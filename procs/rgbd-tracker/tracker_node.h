@@ -110,7 +110,9 @@ class TrackerNode {
   void publishReceipt();
   void publishStatus();
   void handleAvailable(int timeout_ms);
-  bool messagesWaiting() const;  // on either LCM socket, not read yet
+  // Waits up to timeout_ms for a message on either LCM socket; which have one, in 'readable'
+  // (may be null).
+  bool pollSockets(int timeout_ms, std::array<bool, 2>* readable) const;
   // Relocalisation off the frame path: startRelocalisation() hands frame_ (swapped out,
   // so the next frame decodes into other buffers) and tracker_ to relocaliser_;
   // collectRelocalisation() takes the outcome when it is done, or waits for it ('wait'),
