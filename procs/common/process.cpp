@@ -116,9 +116,10 @@ void printMapParts(const MapParts& parts) {
 }
 
 void printLoopClosures(const LoopClosureCounters& loops) {
-  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_closed %ld\nloops_refused %ld\n"
+  std::printf("loop_queries %ld\nloops_recognised %ld\nloops_agreed %ld\nloops_closed %ld\nloops_refused %ld\n"
               "loops_beyond_drift %ld\nloops_ambiguous %ld\n",
-              loops.queries, loops.recognised, loops.closed, loops.refused, loops.beyond_drift, loops.ambiguous);
+              loops.queries, loops.recognised, loops.agreed, loops.closed, loops.refused, loops.beyond_drift,
+              loops.ambiguous);
 }
 
 void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -65,6 +66,9 @@ void LoopClosureOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "min_correction_m", &min_correction_m, 0.0, 100.0, "m",
           "a closure that moves no keyframe further than this...");
   r->bind(s, "min_correction_deg", &min_correction_deg, 0.0, 180.0, "deg", "...nor turns one further changes nothing");
+  r->bind(s, "agree_sigmas", &agree_sigmas, 0.0, 1000.0, "sigmas",
+          "a recognised place whose loop edge the map already meets within this many of its sigmas "
+          "closes nothing (0: every one is solved)");
   r->bind(s, "join_max_speed_m_s", &join_max_speed_m_s, 0.0, 100.0, "m/s",
           "a part joins another only where its first keyframe lies within this speed times the time "
           "since that part's last keyframe before it (0: anywhere)...");
@@ -122,38 +126,76 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
       loop.sigma_t = Vec3::Constant(std::max(match.best.sigma.translation_m, options_.loop_sigma_min_m));
       loop.sigma_r = Vec3::Constant(std::max(match.best.sigma.rotation_deg, options_.loop_sigma_min_deg) / kLoopDegPerRad);
       loop.kind = PoseGraphEdgeKind::kLoop;
-      const auto graph_start = LoopClock::now();
-      PoseGraph graph = buildGraph(*map, loop);
-      PoseGraphResult solved = optimisePoseGraph(graph, options_.graph);
-      // Loop edges that disagree with the solution are dropped, and the graph solved again.
-      if (solved.ok() && solved.loop_edges_disagreeing > 0) {
-        PoseGraph kept;
-        kept.nodes = graph.nodes;
-        for (size_t i = 0; i < graph.edges.size(); ++i) {
-          if (!solved.edges[i].disagrees || graph.edges[i].kind != PoseGraphEdgeKind::kLoop) kept.edges.push_back(graph.edges[i]);
-        }
-        const bool new_edge_kept = !solved.edges.back().disagrees;
-        graph = std::move(kept);
-        solved = new_edge_kept ? optimisePoseGraph(graph, options_.graph) : PoseGraphResult{};
-        result.refused = !new_edge_kept;
-      }
-      result.graph_ms = loopMsSince(graph_start);
-      if (result.refused || !solved.ok()) {
-        ++counters_.refused;
-        result.refused = true;
-        result.joined_part = result.joined_to = -1;
+      const PoseGraphEdgeResidual before =
+          poseGraphEdgeResidual(loop, map->keyframe(loop.from)->T_w_c, kf->T_w_c, options_.graph.disagree_sigmas);
+      result.disagreement_sigmas = before.whitened_norm;
+      result.disagreement_m = before.translation_m;
+      result.disagreement_deg = before.rotation_deg;
+      // Within one part only: across parts the poses are in different frames, and a join
+      // always moves the newer part.
+      result.agreed = result.joined_part < 0 && before.whitened_norm <= options_.agree_sigmas;
+      if (result.agreed) {
+        ++counters_.agreed;
+        loops_.push_back(loop);
       } else {
-        loops_.clear();
-        for (const PoseGraphEdge& e : graph.edges) {
-          if (e.kind == PoseGraphEdgeKind::kLoop) loops_.push_back(e);
-        }
-        if (apply(map, solved, graph, changes, &result)) ++counters_.closed;
-        if (result.joined_part >= 0) joinParts(map, result.joined_part, result.joined_to, changes);
+        solveAndApply(map, loop, changes, &result);
       }
     }
   }
   places_->add(id, map->keyframe(id)->T_w_c, std::move(features));
   return result;
+}
+
+// The pose graph with the new loop edge 'loop': solved, loop edges that disagree with the
+// solution dropped and solved again (the new one among them: refused), then applied.
+void LoopCloser::solveAndApply(Map* map, const PoseGraphEdge& loop, MapChanges* changes, LoopClosureResult* result) {
+  const auto graph_start = LoopClock::now();
+  PoseGraph graph = buildGraph(*map, loop);
+  PoseGraphResult solved = optimisePoseGraph(graph, options_.graph);
+  // Loop edges that disagree with the solution are dropped, and the graph solved again.
+  if (solved.ok() && solved.loop_edges_disagreeing > 0) {
+    PoseGraph kept;
+    kept.nodes = graph.nodes;
+    for (size_t i = 0; i < graph.edges.size(); ++i) {
+      if (!solved.edges[i].disagrees || graph.edges[i].kind != PoseGraphEdgeKind::kLoop) kept.edges.push_back(graph.edges[i]);
+    }
+    const bool new_edge_kept = !solved.edges.back().disagrees;
+    graph = std::move(kept);
+    solved = new_edge_kept ? optimisePoseGraph(graph, options_.graph) : PoseGraphResult{};
+    result->refused = !new_edge_kept;
+  }
+  result->graph_ms = loopMsSince(graph_start);
+  if (result->refused || !solved.ok()) {
+    ++counters_.refused;
+    result->refused = true;
+    result->joined_part = result->joined_to = -1;
+  } else {
+    loops_.clear();
+    for (const PoseGraphEdge& e : graph.edges) {
+      if (e.kind == PoseGraphEdgeKind::kLoop) loops_.push_back(e);
+    }
+    if (apply(map, solved, graph, changes, result)) ++counters_.closed;
+    if (result->joined_part >= 0) joinParts(map, result->joined_part, result->joined_to, changes);
+  }
+}
+
+std::string describe(const LoopClosureResult& r) {
+  if (r.place != PlaceStatus::kRecognised) return "";
+  char line[256];
+  const char* verdict = r.agreed ? "agreed" : r.refused ? "refused" : r.closed ? "closed" : "below min_correction";
+  int n = std::snprintf(line, sizeof line, "loop with keyframe %lld: %s", static_cast<long long>(r.with), verdict);
+  if (r.joined_part < 0 && n > 0 && n < static_cast<int>(sizeof line)) {  // across parts: frames differ
+    n += std::snprintf(line + n, sizeof line - n, ", disagreement %.1f sigmas (%.3f m, %.2f deg)", r.disagreement_sigmas,
+                       r.disagreement_m, r.disagreement_deg);
+  }
+  if (r.closed && n > 0 && n < static_cast<int>(sizeof line)) {
+    n += std::snprintf(line + n, sizeof line - n, ", correction %.3f m, %.2f deg", r.correction_m, r.correction_deg);
+  }
+  if (r.joined_part >= 0 && n > 0 && n < static_cast<int>(sizeof line)) {
+    std::snprintf(line + n, sizeof line - n, ", part %lld joined to %lld", static_cast<long long>(r.joined_part),
+                  static_cast<long long>(r.joined_to));
+  }
+  return line;
 }
 
 // Place recognition within the keyframe's part first, with the odometry check; failing
