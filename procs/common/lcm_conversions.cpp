@@ -415,6 +415,8 @@ rgbdslam::keyframe_t toLcm(const KeyframeData& keyframe, const KeyframeEncoding&
   for (const auto& p : keyframe.new_points) msg.new_points.push_back(toLcm(p));
   msg.num_new_points = static_cast<int32_t>(msg.new_points.size());
   msg.new_part = keyframe.new_part;
+  msg.anchor_keyframe_id = keyframe.anchor;
+  putPose(keyframe.T_w_anchor, msg.anchor_position, msg.anchor_orientation);
   return msg;
 }
 
@@ -493,6 +495,17 @@ Expected<KeyframeData> fromLcm(const rgbdslam::keyframe_t& msg) {
   keyframe.id = msg.keyframe_id;
   keyframe.T_w_c = *T_w_c;
   keyframe.new_part = msg.new_part;
+  if (msg.anchor_keyframe_id >= 0) {  // -1: none
+    if (msg.anchor_keyframe_id >= msg.keyframe_id) {
+      return Error{what + "anchor keyframe " + std::to_string(msg.anchor_keyframe_id) + " is not older than the keyframe"};
+    }
+    auto T_w_anchor = getPose(msg.anchor_position, msg.anchor_orientation);
+    if (!T_w_anchor) return Error{what + "anchor: " + T_w_anchor.error()};
+    keyframe.anchor = msg.anchor_keyframe_id;
+    keyframe.T_w_anchor = *T_w_anchor;
+  } else if (msg.anchor_keyframe_id != -1) {
+    return Error{what + "anchor keyframe id " + std::to_string(msg.anchor_keyframe_id) + " (-1 or an older keyframe)"};
+  }
   if (Status s = decodeGrey(msg, &keyframe); !s) return Error{what + s.error()};
   if (msg.depth_format != rgbdslam::keyframe_t::DEPTH_NONE) {  // the inverse-depth decoder reads the scale
     if (Status s = checkDepthScale(msg.depth_scale); !s) return Error{what + s.error()};

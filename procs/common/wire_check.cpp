@@ -118,7 +118,7 @@ Status checkWire(const rgbdslam::keyframe_t*, const void* data, size_t size) {
   imageBytes(r, "depth_size", "depth");
   r.array(r.count("num_measurements", kMaxKeyframePoints), kMeasurementBytes, "measurements");
   r.array(r.count("num_new_points", kMaxKeyframePoints), kMapPointBytes, "new_points");
-  r.skip(1, "new_part");
+  r.skip(1 + 8 + 3 * 8 + 4 * 8, "new_part, anchor_keyframe_id, anchor_position, anchor_orientation");
   return r.finish();
 }
 

@@ -11,6 +11,7 @@ namespace {
 
 constexpr int kLcmTimeoutMs = 10;          // [ms] outbox flush period when nothing arrives
 constexpr auto kWorkerTick = std::chrono::milliseconds(50);  // worker wake-up when idle
+constexpr double kLogAnchorMoveM = 0.1;  // a keyframe moved with its anchor further is logged [m]
 
 int64_t steadyNowUs() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -132,6 +133,12 @@ void MapperNode::workerLoop() {
         if (step->result.status != MapperResult::Status::kIntegrated) {
           std::cerr << "rgbd-mapper: keyframe " << step->id << " refused: " << step->result.error << "\n";
         }
+        if (step->result.anchor_moved_m > kLogAnchorMoveM) {
+          std::cerr << "rgbd-mapper: keyframe " << step->id << " came " << step->result.anchor_moved_m << " m, "
+                    << step->result.anchor_moved_deg << " deg off the map: moved with its anchor keyframe\n";
+        }
+        const std::string loop = describe(step->result.loop);
+        if (!loop.empty()) std::cerr << "rgbd-mapper: keyframe " << step->id << ": " << loop << "\n";
         if (!step->journal_error.empty()) {
           std::cerr << "rgbd-mapper: error: " << step->journal_error << " (the map is not persisted)\n";
         }

@@ -205,6 +205,54 @@ TEST(Mapper, ReportsWhatChangedAndRefusesAKeyframeItHolds) {
   EXPECT_TRUE(mapper.takeChanges().empty()) << "a converged refine() changes nothing";
 }
 
+// A keyframe the tracker made before a correction reached it (mapper.h, "Anchor"): its pose
+// and its provisional points are in the map as the tracker had it, here the mapper's moved by
+// 1.5 m and 40 deg (what a join of parts does). Through its anchor it lands where it belongs;
+// without one, local bundle adjustment cannot pull it back from there.
+TEST(Mapper, AKeyframeMovesWithItsAnchorIntoTheMapAsItIsNow) {
+  const Sequence seq = makeSequence(SlamMode::kDepthBa, 6);
+  const SE3 stale_from_now(Mat3(expSO3(Vec3(0.0, 40.0 * kDegree, 0.0))), Vec3(1.5, 0.0, -0.5));
+  for (const bool anchored : {true, false}) {
+    Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+    for (int k = 0; k < 5; ++k) ASSERT_EQ(mapper.addKeyframe(seq.keyframes[k]).status, MapperResult::Status::kIntegrated);
+    KeyframeData stale = seq.keyframes[5];
+    stale.T_w_c = stale_from_now * stale.T_w_c;
+    for (MapPointData& p : stale.new_points) p.p_w = stale_from_now * p.p_w;
+    if (anchored) {
+      stale.anchor = 4;
+      stale.T_w_anchor = stale_from_now * mapper.map().keyframe(4)->T_w_c;
+    }
+    const MapperResult result = mapper.addKeyframe(stale);
+    ASSERT_EQ(result.status, MapperResult::Status::kIntegrated) << result.error;
+    const double error_m = (mapper.map().keyframe(5)->T_w_c.translation() - seq.truth[5].translation()).norm();
+    std::printf("%s: moved %.3f m %.1f deg with its anchor, %.4f m from the truth after local BA\n",
+                anchored ? "anchored" : "no anchor", result.anchor_moved_m, result.anchor_moved_deg, error_m);
+    if (anchored) {
+      EXPECT_GT(result.anchor_moved_m, 1.0);
+      EXPECT_NEAR(result.anchor_moved_deg, 40.0, 1.0);
+      EXPECT_LT(error_m, 0.01);
+      for (const MapPointData& p : stale.new_points) {  // its points came with it
+        if (const MapPoint* point = mapper.map().point(p.id)) {
+          EXPECT_LT((point->p_w - stale_from_now.inverse() * p.p_w).norm(), 0.1) << "point " << p.id;
+        }
+      }
+    } else {
+      EXPECT_EQ(result.anchor_moved_m, 0.0);
+      EXPECT_GT(error_m, 0.5);
+    }
+  }
+  // An anchor the map does not hold (culled since, here never sent): taken as it came, and said so.
+  Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+  ASSERT_EQ(mapper.addKeyframe(seq.keyframes[0]).status, MapperResult::Status::kIntegrated);
+  KeyframeData orphan = seq.keyframes[2];
+  orphan.anchor = 1;
+  orphan.T_w_anchor = stale_from_now;
+  const MapperResult result = mapper.addKeyframe(orphan);
+  ASSERT_EQ(result.status, MapperResult::Status::kIntegrated) << result.error;
+  EXPECT_TRUE(result.anchor_missing);
+  EXPECT_EQ(result.anchor_moved_m, 0.0);
+}
+
 // In mono every point comes from epipolar search; a keyframe searches against a second
 // partner for the corners the first one could not triangulate (epipolar_partners_mono).
 TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {

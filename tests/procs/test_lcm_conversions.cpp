@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 
 #include "rgbdslam/image/corners.h"
 #include "rgbdslam/image/pyramid.h"
@@ -191,6 +192,33 @@ TEST(LcmConversions, KeyframeRoundTrip) {
   auto part = fromLcm(*decodeMessage<rgbdslam::keyframe_t>(encode(toLcm(starting)).data(), encode(toLcm(starting)).size()));
   ASSERT_TRUE(part) << part.error();
   EXPECT_TRUE(part->new_part);
+}
+
+// The anchor keyframe (mapper.h, "Anchor") and its pose come through; an anchor that is not an
+// older keyframe, or a pose that is not one, is refused with the field named.
+TEST(LcmConversions, KeyframeAnchorRoundTripAndHostileAnchors) {
+  KeyframeData keyframe = test::sampleKeyframe();
+  EXPECT_EQ(fromLcm(toLcm(keyframe))->anchor, -1);
+  keyframe.anchor = 2;
+  keyframe.T_w_anchor = SE3(Mat3(Eigen::AngleAxisd(0.3, Vec3::UnitZ()).toRotationMatrix()), Vec3(4, -5, 6));
+  const auto bytes = encode(toLcm(keyframe));
+  auto back = fromLcm(*decodeMessage<rgbdslam::keyframe_t>(bytes.data(), bytes.size()));
+  ASSERT_TRUE(back) << back.error();
+  EXPECT_EQ(back->anchor, 2);
+  EXPECT_LT((back->T_w_anchor.inverse() * keyframe.T_w_anchor).log().norm(), 1e-12);
+  rgbdslam::keyframe_t msg = toLcm(keyframe);
+  for (int64_t id : {int64_t{3}, int64_t{4}, int64_t{-2}, std::numeric_limits<int64_t>::min()}) {
+    msg.anchor_keyframe_id = id;
+    auto bad = fromLcm(msg);
+    ASSERT_FALSE(bad) << id;
+    EXPECT_NE(bad.error().find("anchor"), std::string::npos) << bad.error();
+  }
+  msg = toLcm(keyframe);
+  msg.anchor_position[0] = std::nan("");
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(keyframe);
+  msg.anchor_orientation[0] = 2.0;
+  EXPECT_FALSE(fromLcm(msg));
 }
 
 // A keyframe's part is named by the keyframe that started it: never a later one, never < 0.

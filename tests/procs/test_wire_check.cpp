@@ -80,13 +80,15 @@ TEST(WireCheck, CountsNotBackedByBytesAreRejectedBeforeAllocation) {
   keyframe.id = 0;
   keyframe.grey = cv::Mat(4, 4, CV_8UC1, cv::Scalar(10));
   auto bytes = test::encode(toLcm(keyframe));
-  // The last two int32 are num_measurements and num_new_points, then the byte of new_part.
-  putBigEndian32(bytes, bytes.size() - 9, limits::kMaxKeyframePoints);
+  // The last two int32 are num_measurements and num_new_points, then the byte of new_part
+  // and the anchor (an int64 and 7 doubles).
+  const size_t tail = 1 + 8 + 7 * 8;
+  putBigEndian32(bytes, bytes.size() - tail - 8, limits::kMaxKeyframePoints);
   expectRejected<rgbdslam::keyframe_t>(bytes, "measurements");
-  putBigEndian32(bytes, bytes.size() - 9, std::numeric_limits<int32_t>::max());
+  putBigEndian32(bytes, bytes.size() - tail - 8, std::numeric_limits<int32_t>::max());
   expectRejected<rgbdslam::keyframe_t>(bytes, "num_measurements");
-  putBigEndian32(bytes, bytes.size() - 9, 0);
-  putBigEndian32(bytes, bytes.size() - 5, 100000000);
+  putBigEndian32(bytes, bytes.size() - tail - 8, 0);
+  putBigEndian32(bytes, bytes.size() - tail - 4, 100000000);
   expectRejected<rgbdslam::keyframe_t>(bytes, "num_new_points");
 }
 

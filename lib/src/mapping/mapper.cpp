@@ -172,8 +172,17 @@ void Mapper::Impl::load(const LoadedMap& loaded) {
 }
 
 void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
+  // Tracked against the map as the tracker had it: moved as its anchor has moved since ("Anchor").
+  SE3 moved;
+  if (data.anchor >= 0) {
+    if (const Keyframe* anchor = map_.keyframe(data.anchor)) moved = anchor->T_w_c * data.T_w_anchor.inverse();
+    else result->anchor_missing = true;
+  }
+  const SE3 T_w_c = moved * data.T_w_c;
+  result->anchor_moved_m = (T_w_c.translation() - data.T_w_c.translation()).norm();
+  result->anchor_moved_deg = T_w_c.rotation().angularDistance(data.T_w_c.rotation()) * 180.0 / M_PI;
   KeyframeData bare;  // the image content only; points and measurements are added checked
-  bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = data.T_w_c;
+  bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = T_w_c;
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
   KeyframeBuildOptions build = options_.keyframe_build;
   if (data.grey_lossy) build.corners = lossyCornerOptions(build.corners);
@@ -181,7 +190,10 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, build));
   kf->part = part;
   if (part == kf->id && kf->id != 0) ++parts_started_;
-  for (const MapPointData& p : data.new_points) addPoint(MapPoint(p));
+  for (MapPointData p : data.new_points) {
+    p.p_w = moved * p.p_w;
+    addPoint(MapPoint(p));
+  }
   for (const Measurement& m : data.measurements) {
     const MapPoint* point = map_.point(m.point_id);
     if (!point) ++result->dropped_measurements;

@@ -422,6 +422,8 @@ class Tracker::Impl {
     std::vector<Measurement> measurements;
     cv::Mat depth;  // a copy: the caller's frame may be reused
     double depth_scale = 0.0;
+    KeyframeId anchor = -1;  // the anchor keyframe and its pose then (KeyframeData::anchor)
+    SE3 T_w_anchor;
   };
   KeyframeData addKeyframe(PendingKeyframe pending);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;
@@ -1495,6 +1497,10 @@ void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
     published_history_.clear();
     return;  // no pose (initialised: keyframe 0 is the world, no correction yet)
   }
+  if (const Keyframe* anchor = anchor_ ? replica_.map().keyframe(anchor_->id) : nullptr) {
+    result->anchor = anchor->id;
+    result->T_anchor_c = anchor->T_w_c.inverse() * result->map_T_w_c;
+  }
   result->pose.T_w_c = published(result->pose.T_w_c);
   holdStepAgainstMotion(result, utime);
   result->correction_m = offset_.position.norm();
@@ -1661,6 +1667,7 @@ TrackResult Tracker::Impl::accept(const Attempt& attempt, const RgbdFrame& frame
   if (keyframes_allowed_ && shouldAddKeyframe(replica_.map(), input, options_.keyframes)) {
     pending_keyframe_ = PendingKeyframe{frame.utime, result.pose.T_w_c, foundMeasurements(frame),
                                         frame.depth.empty() ? cv::Mat() : frame.depth.clone(), frame.depth_scale};
+    if (anchor_) pending_keyframe_->anchor = anchor_->id, pending_keyframe_->T_w_anchor = anchor_->T_w_k;
   }
   return result;
 }
@@ -1883,6 +1890,8 @@ KeyframeData Tracker::Impl::addKeyframe(PendingKeyframe pending) {
   data.depth = std::move(pending.depth);
   data.depth_scale = pending.depth_scale;
   data.measurements = std::move(pending.measurements);
+  data.anchor = pending.anchor;
+  data.T_w_anchor = pending.T_w_anchor;
   std::unique_ptr<Keyframe> keyframe = makeKeyframe(data, options_.keyframe_build);
   keyframe->part = part_;
   std::vector<NewPoint> points;

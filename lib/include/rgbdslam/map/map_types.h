@@ -40,6 +40,10 @@ struct KeyframeData {
   // The first keyframe of a new part of the map (mapper.h, "Parts"): made where the tracker
   // was lost in unmapped space, at the pose it coasted to; it measures no earlier point.
   bool new_part = false;
+  // The keyframe the pose was tracked against and its pose in the tracker's map then (-1:
+  // none): the mapper re-expresses this keyframe in its own map through it (mapper.h).
+  KeyframeId anchor = -1;
+  SE3 T_w_anchor;
 };
 
 struct KeyframePose {

@@ -25,6 +25,16 @@
 //   and triggers global bundle adjustment.
 //   takeChanges(): the ids of keyframes and points changed or removed since the last call.
 //   The mapper versions nothing: the map publisher (sync/map_publisher.h) does.
+// Anchor: the tracker tracks against the map as it last received it. A keyframe it made
+// before a correction reached it (bundle adjustment, a loop closure, a join of parts: over
+// the link, a second or more) carries its pose in the map as it was; after a join, metres and
+// tens of degrees off. Local BA cannot pull it back from there: the loop closer saw each such
+// keyframe as a new loop (29 places recognised and 26 closed in one 10-minute flight, most
+// 1-5 m and 20-60 deg off, the keyframes just after a closure). So each keyframe names the
+// keyframe its pose rests on and that keyframe's pose then (KeyframeData::anchor); if the
+// anchor is in the map, the new keyframe and its provisional points move by what the anchor
+// has moved since (MapperResult::anchor_moved_*). Without it (a part's first keyframe, an
+// anchor culled since), the pose is taken as it comes.
 // Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
 // the next culling; a depth reading judged an outlier is dropped at once (depth set to 0),
 // keeping the 2-D measurement.
@@ -122,6 +132,9 @@ struct MapperResult {
   int dropped_measurements = 0;  // measurements of points the map does not know
   int cross_part_measurements = 0;  // of points of another part of the map: dropped ("Parts")
   int epipolar_points = 0;       // points added by epipolar search
+  double anchor_moved_m = 0.0;    // how far the keyframe was moved with its anchor ("Anchor") [m]
+  double anchor_moved_deg = 0.0;  // ...and turned [deg]
+  bool anchor_missing = false;    // it named an anchor the map no longer has: taken as it came
   double integrate_ms = 0.0, local_ba_ms = 0.0;
   LoopClosureResult loop;        // the loop closer's verdict on this keyframe
 };

@@ -305,6 +305,11 @@ struct TrackResult {
   SE3 map_T_w_c;
   double correction_m = 0.0;    // [m]
   double correction_deg = 0.0;  // [deg]
+  // The keyframe the pose rests on (the source of most points found, else the nearest in the
+  // part) and map_T_w_c relative to it: what re-expresses the pose in the map as it ends up
+  // (rgbd-slam's final-map trajectory, as ORB-SLAM2 writes its own). -1: no pose, or none.
+  KeyframeId anchor = -1;
+  SE3 T_anchor_c;
   double track_ms = 0.0;                     // time spent in track() or trackPose() [ms]
 };
 
