@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/cli.h"
 #include "common/frame_log.h"
@@ -72,6 +73,17 @@ class BatchRunner {
   long rejoins_ = 0;              // ...and times the tracker went back to a part it had left
   Trajectory map_trajectory_;     // each posed frame's map pose (TrackResult::map_T_w_c)
   std::map<KeyframeId, Trajectory> part_trajectories_;  // map poses by the part tracked in
+  // Each posed frame against the keyframe its pose rests on (TrackResult::anchor), for the
+  // trajectory in the map as it ends (finalMapTrajectory).
+  struct AnchoredPose {
+    double t_s;
+    KeyframeId anchor;  // -1: none
+    SE3 T_anchor_c;
+    KeyframeId part;
+    SE3 map_T_w_c;
+  };
+  std::vector<AnchoredPose> anchored_;
+  Trajectory finalMapTrajectory(long* left_out) const;
   double max_correction_m_ = 0.0;  // largest map correction not yet in the published pose [m]
   long bad_frames_ = 0;
   // Map files (printed only when --load-map or --save-map is given).
