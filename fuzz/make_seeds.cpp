@@ -31,6 +31,10 @@ void writeMessages(const fs::path& out) {
   write(out / "fuzz_rgbd_frame", "depth_only", test::encode(toLcm(depth_only, FrameEncoding{})));
   const KeyframeData keyframe = test::sampleKeyframe();
   write(out / "fuzz_keyframe", "lossless", test::encode(toLcm(keyframe)));
+  KeyframeData anchored = keyframe;  // names the keyframe its pose rests on (mapper.h, "Anchor")
+  anchored.anchor = keyframe.id - 1;
+  anchored.T_w_anchor = SE3(Mat3::Identity(), Vec3(0.5, 0.0, -0.25));
+  write(out / "fuzz_keyframe", "anchored", test::encode(toLcm(anchored)));
   write(out / "fuzz_keyframe", "jpeg_half", test::encode(toLcm(keyframe, KeyframeEncoding{true, 75, 2})));
   write(out / "fuzz_keyframe", "jpeg_quarter", test::encode(toLcm(keyframe, KeyframeEncoding{true, 75, 4})));
   KeyframeEncoding inverse{true, 75, 4};

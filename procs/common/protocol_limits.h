@@ -8,6 +8,7 @@
 
 #include "rgbdslam/camera/calibration_io.h"
 #include "rgbdslam/image/pyramid.h"
+#include "rgbdslam/map/map_types.h"
 
 namespace rgbdslam::limits {
 
@@ -34,7 +35,7 @@ constexpr int32_t kMaxStringBytes = 4096;  // [bytes] including the terminating 
 // World: positions (camera centres, points) within 10 km of the map's origin; beyond it a
 // float point position has cm resolution and the bundle adjuster's numbers lose meaning
 // (1e155 m aborted Ceres). A MAV's indoor map spans tens of metres.
-constexpr double kMaxWorldCoordinateM = 1e4;  // [m] per axis
+constexpr double kMaxWorldCoordinateM = kWorldBoundM;  // [m] per axis (map_types.h)
 // Measured depths: no RGB-D sensor reads beyond 100 m (Kinect: 10 m); the options'
 // max_depth_m is bounded alike.
 constexpr double kMaxDepthM = 100.0;  // [m]

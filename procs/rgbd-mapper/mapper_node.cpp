@@ -11,7 +11,8 @@ namespace {
 
 constexpr int kLcmTimeoutMs = 10;          // [ms] outbox flush period when nothing arrives
 constexpr auto kWorkerTick = std::chrono::milliseconds(50);  // worker wake-up when idle
-constexpr double kLogAnchorMoveM = 0.1;  // a keyframe moved with its anchor further is logged [m]
+constexpr double kLogAnchorMoveM = 0.1;    // a keyframe moved with its anchor further is logged [m]...
+constexpr double kLogAnchorTurnDeg = 5.0;  // ...or turned further [deg]
 
 int64_t steadyNowUs() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -133,9 +134,14 @@ void MapperNode::workerLoop() {
         if (step->result.status != MapperResult::Status::kIntegrated) {
           std::cerr << "rgbd-mapper: keyframe " << step->id << " refused: " << step->result.error << "\n";
         }
-        if (step->result.anchor_moved_m > kLogAnchorMoveM) {
+        if (step->result.anchor_moved_m > kLogAnchorMoveM || step->result.anchor_moved_deg > kLogAnchorTurnDeg) {
           std::cerr << "rgbd-mapper: keyframe " << step->id << " came " << step->result.anchor_moved_m << " m, "
                     << step->result.anchor_moved_deg << " deg off the map: moved with its anchor keyframe\n";
+        }
+        if (step->result.anchor_missing || step->result.anchor_refused) {
+          std::cerr << "rgbd-mapper: keyframe " << step->id << " taken at its pose as it came: its anchor keyframe is "
+                    << (step->result.anchor_refused ? "beyond the world bound when moved" : "not in the map or its part")
+                    << "\n";
         }
         const std::string loop = describe(step->result.loop);
         if (!loop.empty()) std::cerr << "rgbd-mapper: keyframe " << step->id << ": " << loop << "\n";

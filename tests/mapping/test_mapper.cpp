@@ -251,6 +251,23 @@ TEST(Mapper, AKeyframeMovesWithItsAnchorIntoTheMapAsItIsNow) {
   ASSERT_EQ(result.status, MapperResult::Status::kIntegrated) << result.error;
   EXPECT_TRUE(result.anchor_missing);
   EXPECT_EQ(result.anchor_moved_m, 0.0);
+  // A hostile anchor: the keyframe's pose and the anchor's each within the protocol's world
+  // bound, but together they would move the keyframe 18 km out, past the bound every map
+  // message is checked against (a map the tracker would refuse for good).
+  KeyframeData hostile = seq.keyframes[1];
+  hostile.anchor = 0;
+  hostile.T_w_c = SE3(hostile.T_w_c.rotation(), Vec3(0.9 * kWorldBoundM, 0.0, 0.0));
+  hostile.T_w_anchor = SE3(Mat3::Identity(), Vec3(-0.9 * kWorldBoundM, 0.0, 0.0));
+  const MapperResult refused = mapper.addKeyframe(hostile);
+  ASSERT_EQ(refused.status, MapperResult::Status::kIntegrated) << refused.error;
+  EXPECT_TRUE(refused.anchor_refused);
+  EXPECT_EQ(refused.anchor_moved_m, 0.0);
+  for (const auto& [id, kf] : mapper.map().keyframes()) {
+    EXPECT_LE(kf->T_w_c.translation().cwiseAbs().maxCoeff(), kWorldBoundM) << "keyframe " << id;
+  }
+  for (const auto& [id, point] : mapper.map().points()) {
+    EXPECT_LE(point.p_w.cwiseAbs().maxCoeff(), kWorldBoundM) << "point " << id;
+  }
 }
 
 // In mono every point comes from epipolar search; a keyframe searches against a second

@@ -126,14 +126,16 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
       loop.sigma_t = Vec3::Constant(std::max(match.best.sigma.translation_m, options_.loop_sigma_min_m));
       loop.sigma_r = Vec3::Constant(std::max(match.best.sigma.rotation_deg, options_.loop_sigma_min_deg) / kLoopDegPerRad);
       loop.kind = PoseGraphEdgeKind::kLoop;
+      const Keyframe* from = map->keyframe(loop.from);
       const PoseGraphEdgeResidual before =
-          poseGraphEdgeResidual(loop, map->keyframe(loop.from)->T_w_c, kf->T_w_c, options_.graph.disagree_sigmas);
+          poseGraphEdgeResidual(loop, from->T_w_c, kf->T_w_c, options_.graph.disagree_sigmas);
+      // Within one part only: across parts the poses are in different frames, and a join
+      // always moves the newer part.
+      result.same_part = from->part == kf->part;
       result.disagreement_sigmas = before.whitened_norm;
       result.disagreement_m = before.translation_m;
       result.disagreement_deg = before.rotation_deg;
-      // Within one part only: across parts the poses are in different frames, and a join
-      // always moves the newer part.
-      result.agreed = result.joined_part < 0 && before.whitened_norm <= options_.agree_sigmas;
+      result.agreed = result.same_part && options_.agree_sigmas > 0.0 && before.whitened_norm <= options_.agree_sigmas;
       if (result.agreed) {
         ++counters_.agreed;
         loops_.push_back(loop);
@@ -184,7 +186,7 @@ std::string describe(const LoopClosureResult& r) {
   char line[256];
   const char* verdict = r.agreed ? "agreed" : r.refused ? "refused" : r.closed ? "closed" : "below min_correction";
   int n = std::snprintf(line, sizeof line, "loop with keyframe %lld: %s", static_cast<long long>(r.with), verdict);
-  if (r.joined_part < 0 && n > 0 && n < static_cast<int>(sizeof line)) {  // across parts: frames differ
+  if (r.same_part && n > 0 && n < static_cast<int>(sizeof line)) {  // across parts the frames differ
     n += std::snprintf(line + n, sizeof line - n, ", disagreement %.1f sigmas (%.3f m, %.2f deg)", r.disagreement_sigmas,
                        r.disagreement_m, r.disagreement_deg);
   }

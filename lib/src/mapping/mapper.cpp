@@ -90,6 +90,7 @@ class Mapper::Impl {
   std::string checkKeyframe(const KeyframeData& data) const;
   void integrate(const KeyframeData& data, MapperResult* result);
   KeyframeId partOf(const KeyframeData& data) const;
+  SE3 anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const;
   void addPoint(const MapPoint& point);
   void addMeasurement(KeyframeId kf, Measurement m);
   KeyframeId epipolarPartner(const Keyframe& kf) const;
@@ -172,12 +173,8 @@ void Mapper::Impl::load(const LoadedMap& loaded) {
 }
 
 void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
-  // Tracked against the map as the tracker had it: moved as its anchor has moved since ("Anchor").
-  SE3 moved;
-  if (data.anchor >= 0) {
-    if (const Keyframe* anchor = map_.keyframe(data.anchor)) moved = anchor->T_w_c * data.T_w_anchor.inverse();
-    else result->anchor_missing = true;
-  }
+  const KeyframeId part = partOf(data);
+  const SE3 moved = anchorMove(data, part, result);
   const SE3 T_w_c = moved * data.T_w_c;
   result->anchor_moved_m = (T_w_c.translation() - data.T_w_c.translation()).norm();
   result->anchor_moved_deg = T_w_c.rotation().angularDistance(data.T_w_c.rotation()) * 180.0 / M_PI;
@@ -186,7 +183,6 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
   KeyframeBuildOptions build = options_.keyframe_build;
   if (data.grey_lossy) build.corners = lossyCornerOptions(build.corners);
-  const KeyframeId part = partOf(data);
   Keyframe* kf = map_.addKeyframe(makeKeyframe(bare, build));
   kf->part = part;
   if (part == kf->id && kf->id != 0) ++parts_started_;
@@ -208,6 +204,28 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
     }
   }
   result->epipolar_points = addEpipolarPoints(*kf);
+}
+
+// Tracked against the map as the tracker had it: the move of its anchor since ("Anchor"), if
+// the anchor is in the map, in the part the keyframe joins, and the move keeps the keyframe
+// and its points within the world (a sender can name an anchor pose that passes the
+// protocol's bound alone and together with the keyframe's does not); else none.
+SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const {
+  if (data.anchor < 0 || data.new_part) return SE3();
+  const Keyframe* anchor = map_.keyframe(data.anchor);
+  if (!anchor || anchor->part != part) {
+    result->anchor_missing = true;
+    return SE3();
+  }
+  const SE3 moved = anchor->T_w_c * data.T_w_anchor.inverse();
+  const auto inWorld = [](const Vec3& p) { return p.cwiseAbs().maxCoeff() <= kWorldBoundM; };
+  bool within = inWorld((moved * data.T_w_c).translation());
+  for (const MapPointData& p : data.new_points) within = within && inWorld(moved * p.p_w);
+  if (!within) {
+    result->anchor_refused = true;
+    return SE3();
+  }
+  return moved;
 }
 
 // The part a keyframe joins (mapper.h, "Parts"): a new one when it says so (the tracker

@@ -614,7 +614,9 @@ class Tracker::Impl {
   BowIndex bow_index_;
   std::future<void> vocabulary_warmup_;
   std::shared_ptr<std::atomic<bool>> vocabulary_ready_ = std::make_shared<std::atomic<bool>>(false);
-  // The keyframe nearest the last pose, and its pose then (map corrections are measured on it).
+  // The keyframe the pose rests on (setAnchor: the source of most points found, else the
+  // nearest), and its pose then: map corrections are measured on it, and keyframes and
+  // results name it (KeyframeData::anchor, TrackResult::anchor).
   struct Anchor {
     KeyframeId id;
     SE3 T_w_k;

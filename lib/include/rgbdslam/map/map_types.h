@@ -46,6 +46,11 @@ struct KeyframeData {
   SE3 T_w_anchor;
 };
 
+// Positions (camera centres, points) lie within this of the map's origin on every axis: the
+// protocol refuses anything beyond (procs/common/protocol_limits.h), so nothing the mapper
+// derives may go beyond it either.
+constexpr double kWorldBoundM = 1e4;  // [m]
+
 struct KeyframePose {
   KeyframeId id = -1;
   SE3 T_w_c;

@@ -95,8 +95,9 @@ struct LoopClosureResult {
   bool closed = false;        // the map was corrected
   bool refused = false;       // recognised, but the loop edge disagreed with the graph
   bool agreed = false;        // recognised, and the map already agrees with it (agree_sigmas)
+  bool same_part = false;     // the place is in the keyframe's own part (else: a join)
   double disagreement_sigmas = 0.0;  // the new loop edge's whitened residual before any solve
-                                     // (within one part; across parts the frames differ) [-]
+                                     // (meaningful with same_part; across parts the frames differ) [-]
   double disagreement_m = 0.0;       // ...its translation [m]
   double disagreement_deg = 0.0;     // ...and rotation [deg]
   KeyframeId with = -1;       // the old keyframe recognised
