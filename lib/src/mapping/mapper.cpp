@@ -211,7 +211,7 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
 // and its points within the world (a sender can name an anchor pose that passes the
 // protocol's bound alone and together with the keyframe's does not); else none.
 SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const {
-  if (data.anchor < 0 || data.new_part) return SE3();
+  if (!options_.move_with_anchor || data.anchor < 0 || data.new_part) return SE3();
   const Keyframe* anchor = map_.keyframe(data.anchor);
   if (!anchor || anchor->part != part) {
     result->anchor_missing = true;

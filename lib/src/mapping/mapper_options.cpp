@@ -32,6 +32,9 @@ void MapperOptions::bind(OptionRegistry* r, const std::string& s) {
   keyframe_build.bind(r, s);
   ba.bind(r);
   loop_closure.bind(r);
+  r->bind(s, "move_with_anchor", &move_with_anchor,
+          "move a keyframe tracked against a map since moved by what its anchor keyframe has moved "
+          "(false: every keyframe at its pose as it came)");
   // Ranges that only make sense together (a minimum above its maximum leaves nothing).
   r->requireBelow(s, "keyframe_min_depth_m", "keyframe_max_depth_m");
   r->requireBelow(s, "epipolar_min_depth_m", "epipolar_max_depth_m");

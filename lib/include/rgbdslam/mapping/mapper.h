@@ -118,6 +118,9 @@ struct MapperOptions {
   BaOptions ba;                 // use_depth only in mode depth-ba
   KeyframeBuildOptions keyframe_build;
   LoopClosureOptions loop_closure;  // sections loop_closure, place_recognition, pose_graph
+  // Move a keyframe tracked against a map the mapper has since moved with its anchor
+  // ("Anchor"); false: take every keyframe at its pose as it came (as before session 36).
+  bool move_with_anchor = true;
 
   void bind(OptionRegistry* registry, const std::string& section = "mapper");
 };
