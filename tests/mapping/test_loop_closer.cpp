@@ -118,7 +118,7 @@ LoopClosureCounters revisitAfterAClosure(double agree_sigmas) {
 }
 
 // Without the gate every recognition of the revisit solved the graph and moved the whole map
-// by the loop measurement's noise (5-25 mm here; 54 closures in one 10-minute flight).
+// by the loop measurement's noise (5-25 mm here, past min_correction_*).
 TEST(LoopCloser, ClosesOnceAndThenAgrees) {
   const LoopClosureCounters gated = revisitAfterAClosure(LoopClosureOptions{}.agree_sigmas);
   const LoopClosureCounters ungated = revisitAfterAClosure(0.0);
