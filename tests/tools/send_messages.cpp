@@ -111,7 +111,8 @@ std::vector<uint8_t> hostileMessage(const std::string& kind, int64_t map_id) {
   }
   if (kind == "keyframe-huge-counts") {
     auto bytes = spoiledKeyframe(map_id, [](rgbdslam::keyframe_t& m) { m.measurements.clear(), m.new_points.clear(), m.num_measurements = m.num_new_points = 0; });
-    putBigEndian32(bytes, bytes.size() - 9, 100000000);  // num_measurements (then num_new_points, new_part)
+    // num_measurements, then num_new_points (4), new_part (1) and the anchor (8 + 7 * 8)
+    putBigEndian32(bytes, bytes.size() - (4 + 4 + 1 + 8 + 7 * 8), 100000000);
     return bytes;
   }
   if (kind == "status-huge-counts") {
