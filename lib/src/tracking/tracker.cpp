@@ -423,7 +423,7 @@ class Tracker::Impl {
     cv::Mat depth;  // a copy: the caller's frame may be reused
     double depth_scale = 0.0;
     KeyframeId anchor = -1;  // the anchor keyframe and its pose then (KeyframeData::anchor)
-    SE3 T_w_anchor;
+    SE3 T_w_anchor = SE3();
   };
   KeyframeData addKeyframe(PendingKeyframe pending);
   std::vector<Measurement> foundMeasurements(const RgbdFrame& frame) const;

@@ -43,7 +43,7 @@ struct KeyframeData {
   // The keyframe the pose was tracked against and its pose in the tracker's map then (-1:
   // none): the mapper re-expresses this keyframe in its own map through it (mapper.h).
   KeyframeId anchor = -1;
-  SE3 T_w_anchor;
+  SE3 T_w_anchor = SE3();
 };
 
 // Positions (camera centres, points) lie within this of the map's origin on every axis: the
