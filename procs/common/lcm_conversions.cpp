@@ -296,6 +296,8 @@ rgbdslam::pose_t toLcm(const PoseEstimate& pose, int64_t map_id) {
   msg.seq = pose.seq;
   msg.map_id = map_id;
   putPose(pose.T_w_c, msg.position, msg.orientation);
+  putPose(pose.map_T_w_c, msg.map_position, msg.map_orientation);
+  msg.part = pose.part;
   msg.state = static_cast<int8_t>(pose.state);
   msg.points_tracked = pose.points_tracked;
   msg.quality = static_cast<float>(pose.quality);
@@ -307,10 +309,12 @@ Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg) {
   const std::string what = "pose " + std::to_string(msg.seq) + ": ";
   auto T_w_c = getPose(msg.position, msg.orientation);
   if (!T_w_c) return Error{what + T_w_c.error()};
+  auto map_T_w_c = getPose(msg.map_position, msg.map_orientation);
+  if (!map_T_w_c) return Error{what + "map pose: " + map_T_w_c.error()};
   if (msg.state < rgbdslam::pose_t::STATE_INITIALISING || msg.state > rgbdslam::pose_t::STATE_RELOCALISED) {
     return Error{what + "unknown tracking state " + std::to_string(msg.state)};
   }
-  for (Status s : {checkId(msg.seq, "sequence number"), checkId(msg.map_id, "map")}) {
+  for (Status s : {checkId(msg.seq, "sequence number"), checkId(msg.map_id, "map"), checkId(msg.part, "part")}) {
     if (!s) return Error{what + s.error()};
   }
   if (msg.points_tracked < 0) return Error{what + "points_tracked is negative"};
@@ -322,6 +326,8 @@ Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg) {
   pose.utime = msg.utime;
   pose.seq = msg.seq;
   pose.T_w_c = *T_w_c;
+  pose.map_T_w_c = *map_T_w_c;
+  pose.part = msg.part;
   pose.state = static_cast<TrackingState>(msg.state);
   pose.points_tracked = msg.points_tracked;
   pose.quality = msg.quality;

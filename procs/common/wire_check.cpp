@@ -88,7 +88,7 @@ constexpr size_t kMeasurementBytes = 8 + 4 + 4 + 1 + 4;          // measurement_
 constexpr size_t kMapPointBytes = 8 + 3 * 4 + 8 + 4 + 4 + 1;     // map_point_t
 constexpr size_t kKeyframePoseBytes = 8 + 3 * 8 + 4 * 8 + 8;      // keyframe_pose_t
 constexpr size_t kPointPositionBytes = 8 + 3 * 4;                 // point_position_t
-constexpr size_t kPoseBytes = 8 + 8 + 8 + 3 * 8 + 4 * 8 + 1 + 4 + 4 + 4;  // pose_t after the fingerprint
+constexpr size_t kPoseBytes = 8 + 8 + 8 + 2 * (3 * 8 + 4 * 8) + 8 + 1 + 4 + 4 + 4;  // pose_t after the fingerprint
 
 // An image field: format byte(s) already read; int32 size, then the bytes.
 void imageBytes(WireReader& r, const char* size_field, const char* field) {

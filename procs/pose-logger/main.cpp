@@ -58,7 +58,8 @@ class PoseLogger {
 CommandLine makeCommandLine() {
   CommandLine cli("pose-logger", "Writes the poses on SLAM_POSE to a TUM trajectory and a CSV.");
   cli.option("output", "TRAJ.txt", "TUM trajectory file: 't tx ty tz qx qy qz qw' per tracked pose");
-  cli.option("csv", "FILE", "CSV of every pose with state, points, quality, latency", "TRAJ with .csv");
+  cli.option("csv", "FILE", "CSV of every pose with state, points, quality, latency, the pose in the map and its part", "TRAJ with .csv");
+  cli.option("map-output", "FILE", "TUM trajectory of the same poses in the map as it was then (pose_t.map_position): corrections at once, not taken in slowly", "none");
   cli.option("channel", "NAME", "LCM channel to subscribe (the suite's channels.pose)", ChannelOptions{}.pose);
   cli.option("map-id", "ID", "log this map's poses (pose_t.map_id >= 0); poses of other maps are counted and reported", "the first map seen");
   addLcmUrlOption(cli);
@@ -83,11 +84,12 @@ int main(int argc, char** argv) {
     if (!id) return usageError("pose-logger", id.error());
     map_id = *id;
   }
-  auto writer = PoseLogWriter::open(output, csv);
+  const std::string map_output = cli.has("map-output") ? cli.get("map-output") : "";
+  auto writer = PoseLogWriter::open(output, csv, map_output);
   if (!writer) return usageError("pose-logger", writer.error());
   auto lcm = openLcm(cli.get("lcm-url"));
   if (!lcm) return usageError("pose-logger", lcm.error());
-  std::cerr << "pose-logger configuration:\n  output " << output << "\n  csv " << csv
+  std::cerr << "pose-logger configuration:\n  output " << output << "\n  csv " << csv << "\n  map-output " << (map_output.empty() ? "none" : map_output)
             << "\n  channel " << cli.get("channel") << "\n  map-id " << (map_id ? std::to_string(*map_id) : "the first map seen")
             << "\n  lcm-url " << cli.get("lcm-url") << "\n";
 

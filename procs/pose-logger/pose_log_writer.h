@@ -3,7 +3,10 @@
 // and latency. Each line goes to the file in one write(2) on an O_APPEND descriptor, so a
 // SIGKILL loses at most the line being written and never leaves a partial line.
 // The TUM file holds only poses the tracker vouches for (tracking, dodgy, relocalised);
-// the CSV holds every pose, including initialising and lost ones. Lines are as long as their
+// the CSV holds every pose, including initialising and lost ones, with both the published
+// pose and the pose in the map (pose_estimate.h) and the part of the map. A second TUM file,
+// if asked for, holds the vouched-for poses in the map (what the map's accuracy is measured
+// on; the published poses take corrections in slowly). Lines are as long as their
 // numbers need; a pose with a value that is not finite is refused with an error.
 #include <cstdint>
 #include <optional>
@@ -17,7 +20,9 @@ namespace rgbdslam {
 
 class PoseLogWriter {
  public:
-  static Expected<PoseLogWriter> open(const std::string& trajectory_path, const std::string& csv_path);
+  // map_trajectory_path empty: no trajectory of map poses.
+  static Expected<PoseLogWriter> open(const std::string& trajectory_path, const std::string& csv_path,
+                                      const std::string& map_trajectory_path = "");
   PoseLogWriter(PoseLogWriter&& other) noexcept;
   PoseLogWriter& operator=(PoseLogWriter&&) = delete;
   ~PoseLogWriter();
@@ -27,9 +32,10 @@ class PoseLogWriter {
   long csvLines() const { return csv_lines_; }
 
  private:
-  PoseLogWriter(int trajectory_fd, int csv_fd, std::string trajectory_path, std::string csv_path);
-  int trajectory_fd_ = -1, csv_fd_ = -1;
-  std::string trajectory_path_, csv_path_;
+  PoseLogWriter(int trajectory_fd, int csv_fd, int map_fd, std::string trajectory_path, std::string csv_path,
+                std::string map_path);
+  int trajectory_fd_ = -1, csv_fd_ = -1, map_fd_ = -1;
+  std::string trajectory_path_, csv_path_, map_path_;
   long trajectory_lines_ = 0, csv_lines_ = 0;
 };
 

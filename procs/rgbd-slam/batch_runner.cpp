@@ -228,9 +228,9 @@ int BatchRunner::run(const std::atomic<bool>& stop) {
     }
     if (hasPose(last.status)) {
       trajectory.push_back({last.pose.utime * 1e-6, last.pose.T_w_c});
-      map_trajectory_.push_back({last.pose.utime * 1e-6, last.map_T_w_c});
-      part_trajectories_[last.part].push_back({last.pose.utime * 1e-6, last.map_T_w_c});
-      anchored_.push_back({last.pose.utime * 1e-6, last.anchor, last.T_anchor_c, last.part, last.map_T_w_c});
+      map_trajectory_.push_back({last.pose.utime * 1e-6, last.pose.map_T_w_c});
+      part_trajectories_[last.pose.part].push_back({last.pose.utime * 1e-6, last.pose.map_T_w_c});
+      anchored_.push_back({last.pose.utime * 1e-6, last.anchor, last.T_anchor_c, last.pose.part, last.pose.map_T_w_c});
       pose_states_.push_back(last.pose.state);
     }
     if (const std::string event = loss_.update(last); !event.empty()) {

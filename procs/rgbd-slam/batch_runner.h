@@ -71,7 +71,7 @@ class BatchRunner {
   long depth_aided_frames_ = 0;   // frames whose pose depth held with too few points
   long new_parts_ = 0;            // frames that started a new part of the map (tracker.h)
   long rejoins_ = 0;              // ...and times the tracker went back to a part it had left
-  Trajectory map_trajectory_;     // each posed frame's map pose (TrackResult::map_T_w_c)
+  Trajectory map_trajectory_;     // each posed frame's map pose (PoseEstimate::map_T_w_c)
   std::map<KeyframeId, Trajectory> part_trajectories_;  // map poses by the part tracked in
   // Each posed frame against the keyframe its pose rests on (TrackResult::anchor), for the
   // trajectory in the map as it ends (finalMapTrajectory).

@@ -262,7 +262,7 @@ void TrackerNode::trackFrame(const Received& received) {
   result.pose.latency_ms = (now_us - frame.utime) * 1e-3;
   const rgbdslam::pose_t pose = toLcm(result.pose, map_id_);
   local_->publish(options_.channels.pose, &pose);
-  last_published_T_w_c_ = result.pose.T_w_c;
+  last_published_ = result.pose;
   latency_ms_.add(result.pose.latency_ms);
   arrival_ms_.add((received.recv_utime - frame.utime) * 1e-3);
   frame_ms_.add((now_us - received.recv_utime) * 1e-3);
@@ -338,7 +338,9 @@ TrackResult TrackerNode::answerLost(const RgbdFrame& frame, const std::string& r
   const auto start = Clock::now();
   TrackResult result;
   result.pose.state = TrackingState::kLost;
-  result.pose.T_w_c = last_published_T_w_c_;
+  result.pose.T_w_c = last_published_.T_w_c;
+  result.pose.map_T_w_c = last_published_.map_T_w_c;
+  result.pose.part = last_published_.part;
   result.pose.utime = frame.utime;
   result.pose.seq = frame.seq;
   result.error = tracker_.frameError(frame);

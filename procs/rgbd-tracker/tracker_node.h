@@ -203,7 +203,7 @@ class TrackerNode {
   int frames_while_relocalising_ = 0;  // answered lost meanwhile
   long relocalisations_started_ = 0, relocalisations_recovered_ = 0;
   RecentSamples relocalise_ms_;  // the job's trackPose() [ms]
-  SE3 last_published_T_w_c_;     // what answerLost() publishes
+  PoseEstimate last_published_;  // its poses and part are what answerLost() publishes
   LossReport loss_;  // logs losing tracking and relocalising, one line each
   FrameLog frame_log_;  // --frame-log: one line per frame tracked (closed: none)
   std::array<long, 5> state_frames_{};  // frames per TrackingState (by its value)

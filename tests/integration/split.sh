@@ -31,7 +31,8 @@ split_start() {
       --channels 'SLAM_KEYFRAME|SLAM_MAP_RECEIPT|SLAM_STATUS' --delay-ms "$delay" --timeout "$SPLIT_RELAY_TIMEOUT_S" --name up 2> "$dir/relay-up.err"
   bg_onboard SPLIT_DOWN "$TOOLS/lcm-link-relay" --from "$LINK_URL" --to "$LOCAL_URL" \
       --channels 'SLAM_MAP|MAPPER_STATUS' --delay-ms "$delay" --timeout "$SPLIT_RELAY_TIMEOUT_S" --name down 2> "$dir/relay-down.err"
-  bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"
+  bg_onboard SPLIT_LOGGER "$PROCS/pose-logger" --output "$dir/trajectory.txt" --map-output "$dir/map_trajectory.txt" \
+      --lcm-url "$LOCAL_URL" 2> "$dir/logger.err"
   bg_onboard SPLIT_TRACKER "$PROCS/rgbd-tracker" --camera "$SRC/config/cameras/synthetic.yaml" \
       --map-id "$SPLIT_MAP_ID" --set tracker_node.exit_after_idle_s=2,tracker_node.ack_wait_s=20 --lcm-url "$LOCAL_URL" \
       ${SPLIT_TRACKER_ARGS[@]+"${SPLIT_TRACKER_ARGS[@]}"} > "$dir/tracker.out" 2> "$dir/tracker.err"
@@ -90,6 +91,8 @@ split_finish_frames() {
   [ -z "$cut" ] || fail "$cut"
   "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/trajectory.txt" --frames "$frames" > "$dir/eval.txt" \
     || fail "slam-eval failed on $dir"
+  "$PROCS/slam-eval" "$dir/groundtruth.txt" "$dir/map_trajectory.txt" --frames "$frames" > "$dir/eval_map.txt" \
+    || fail "slam-eval failed on $dir/map_trajectory.txt"
   "$TOOLS/lcm-log-stats" "$dir/link.lcm" --json "$dir/link.json" > "$dir/link.txt" || true
 }
 

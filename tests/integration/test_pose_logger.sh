@@ -8,7 +8,7 @@ require_netns
 "$NETNS_RUN" bash -c "
 set -euo pipefail
 cd '$WORK'
-'$PROCS/pose-logger' --output clean.txt --lcm-url '$LCM_URL' 2> clean.log &
+'$PROCS/pose-logger' --output clean.txt --map-output clean_map.txt --lcm-url '$LCM_URL' 2> clean.log &
 logger=\$!
 sleep 0.5
 for kind in truncated oversized wrongtype garbage; do
@@ -35,6 +35,12 @@ wait \$logger || true
 cd "$WORK"
 [ "$(grep -vc '^#' clean.txt)" -eq 50 ] || fail "expected 50 trajectory lines, got $(grep -vc '^#' clean.txt)"
 [ "$(tail -n +2 clean.csv | wc -l)" -eq 50 ] || fail "expected 50 CSV rows"
+# The map poses: the same frames, 1 m along x from the published ones (send-messages), part 5.
+[ "$(grep -vc '^#' clean_map.txt)" -eq 50 ] || fail "expected 50 map trajectory lines"
+paste -d' ' <(grep -v '^#' clean.txt) <(grep -v '^#' clean_map.txt) | awk '
+  $1 != $9 || ($10 - $2 - 1) ^ 2 > 1e-12 || ($11 - $3) ^ 2 > 1e-12 || $8 != $16 { bad = 1 } END { exit bad }' \
+  || fail "the map trajectory is not the published one moved 1 m along x"
+awk -F, 'NR > 1 && $21 != 5 { bad = 1 } END { exit bad }' clean.csv || fail "the CSV's part is not 5"
 grep -q "4 bad messages" clean.log || fail "bad messages not counted: $(cat clean.log)"
 for kind in "truncated" "beyond" "does not decode"; do
   grep -q "$kind" clean.log || fail "no message mentioning '$kind' in: $(cat clean.log)"
@@ -44,6 +50,6 @@ lines=$(grep -vc '^#' killed.txt || true)
 [ "$lines" -gt 0 ] || fail "the killed logger wrote nothing"
 awk '!/^#/ && NF != 8 { bad = 1 } END { exit bad }' killed.txt || fail "partial line in killed.txt"
 [ -z "$(tail -c 1 killed.txt)" ] || fail "killed.txt does not end with a newline"
-awk -F, 'NR > 1 && NF != 13 { bad = 1 } END { exit bad }' killed.csv || fail "partial line in killed.csv"
+awk -F, 'NR > 1 && NF != 21 { bad = 1 } END { exit bad }' killed.csv || fail "partial line in killed.csv"
 echo "clean: 50 poses, 4 bad messages counted; killed after $lines lines, no partial line"
 echo "PASS"

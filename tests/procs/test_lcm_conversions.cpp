@@ -154,6 +154,9 @@ TEST(LcmConversions, PoseRoundTrip) {
   EXPECT_EQ(back->pose.points_tracked, 150);
   EXPECT_FLOAT_EQ(back->pose.latency_ms, 3.25);
   EXPECT_LT((back->pose.T_w_c.inverse() * pose.T_w_c).log().norm(), 1e-12);
+  EXPECT_LT((back->pose.map_T_w_c.inverse() * pose.map_T_w_c).log().norm(), 1e-12);
+  EXPECT_GT((back->pose.map_T_w_c.inverse() * back->pose.T_w_c).log().norm(), 0.1);  // not the published one
+  EXPECT_EQ(back->pose.part, 42);
 }
 
 TEST(LcmConversions, PoseWithBadQuaternionOrStateIsRejected) {
@@ -166,6 +169,23 @@ TEST(LcmConversions, PoseWithBadQuaternionOrStateIsRejected) {
   msg = toLcm(PoseEstimate{}, 1);
   msg.state = 9;
   EXPECT_FALSE(fromLcm(msg));
+  // The map pose is checked as the published one is, and the part's id.
+  msg = toLcm(PoseEstimate{}, 1);
+  msg.map_orientation[2] = 0.5;
+  auto bad = fromLcm(msg);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("map pose: orientation is not a unit quaternion"), std::string::npos) << bad.error();
+  msg = toLcm(PoseEstimate{}, 1);
+  msg.map_position[0] = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(PoseEstimate{}, 1);
+  msg.map_position[2] = 1e9;  // beyond the world bound
+  EXPECT_FALSE(fromLcm(msg));
+  msg = toLcm(PoseEstimate{}, 1);
+  msg.part = -3;
+  bad = fromLcm(msg);
+  ASSERT_FALSE(bad);
+  EXPECT_NE(bad.error().find("part has a negative id"), std::string::npos) << bad.error();
 }
 
 TEST(LcmConversions, KeyframeRoundTrip) {

@@ -49,7 +49,7 @@ TEST(PoseLogWriter, HugeValuesGiveWholeLines) {
   EXPECT_EQ(std::count(trajectory[1].begin(), trajectory[1].end(), ' '), 7) << trajectory[1];
   const auto csv = lines(dir.file("t.csv"));
   ASSERT_EQ(csv.size(), 3u);  // header and two poses
-  EXPECT_EQ(std::count(csv[1].begin(), csv[1].end(), ','), 12) << csv[1];
+  EXPECT_EQ(std::count(csv[1].begin(), csv[1].end(), ','), 20) << csv[1];
   EXPECT_EQ(text(dir.file("t.txt")).back(), '\n');
 }
 
@@ -65,10 +65,43 @@ TEST(PoseLogWriter, NonFiniteValuesAreRefusedNotWritten) {
   bad = test::samplePose();
   bad.latency_ms = std::numeric_limits<double>::infinity();
   EXPECT_FALSE(writer->write(bad));
+  bad = test::samplePose();
+  bad.map_T_w_c = SE3(Eigen::Quaterniond::Identity(), Vec3(0, std::numeric_limits<double>::infinity(), 0));
+  EXPECT_FALSE(writer->write(bad));
   EXPECT_EQ(writer->csvLines(), 0);
   const std::string all = text(dir.file("t.csv")) + text(dir.file("t.txt"));
   EXPECT_EQ(all.find("nan"), std::string::npos) << all;
   EXPECT_EQ(all.find("inf"), std::string::npos) << all;
+}
+
+// The map trajectory holds the vouched-for poses in the map, the CSV both poses and the part.
+TEST(PoseLogWriter, MapTrajectoryHoldsThePosesInTheMap) {
+  test::TempDir dir;
+  auto writer = PoseLogWriter::open(dir.file("t.txt"), dir.file("t.csv"), dir.file("map.txt"));
+  ASSERT_TRUE(writer) << writer.error();
+  const PoseEstimate pose = test::samplePose();
+  PoseEstimate lost = pose;
+  lost.state = TrackingState::kLost;
+  ASSERT_TRUE(writer->write(pose));
+  ASSERT_TRUE(writer->write(lost));
+  const auto map = lines(dir.file("map.txt"));
+  ASSERT_EQ(map.size(), 1u) << text(dir.file("map.txt"));  // the lost pose is not vouched for
+  std::istringstream in(map[0]);
+  double v[8];
+  for (double& x : v) ASSERT_TRUE(in >> x) << map[0];
+  const Vec3 t = pose.map_T_w_c.translation();
+  const Eigen::Quaterniond q = pose.map_T_w_c.rotation();
+  EXPECT_NEAR(v[1], t.x(), 1e-8);
+  EXPECT_NEAR(v[2], t.y(), 1e-8);
+  EXPECT_NEAR(v[3], t.z(), 1e-8);
+  EXPECT_NEAR(std::abs(v[4] * q.x() + v[5] * q.y() + v[6] * q.z() + v[7] * q.w()), 1.0, 1e-8);
+  EXPECT_GT((pose.map_T_w_c.translation() - pose.T_w_c.translation()).norm(), 0.1);
+  const auto csv = lines(dir.file("t.csv"));
+  ASSERT_EQ(csv.size(), 3u);
+  EXPECT_NE(csv[0].find(",map_tx,"), std::string::npos) << csv[0];
+  EXPECT_EQ(csv[1].substr(csv[1].rfind(',') + 1), "42");  // samplePose's part
+  // A map trajectory that cannot be created is an error, the others closed.
+  EXPECT_FALSE(PoseLogWriter::open(dir.file("a.txt"), dir.file("a.csv"), dir.file("no/such/dir/map.txt")));
 }
 
 TEST(MapFilter, KeepsTheFirstMapAndCountsTheOthers) {

@@ -66,6 +66,8 @@ PoseEstimate samplePose() {
   pose.utime = 123;
   pose.seq = 7;
   pose.T_w_c = somePose();
+  pose.map_T_w_c = SE3::exp((Vec6() << 0.5, -0.25, 0.1, 0.02, 0.0, -0.03).finished()) * somePose();
+  pose.part = 42;
   pose.state = TrackingState::kTracking;
   pose.points_tracked = 150;
   pose.quality = 0.5;

@@ -14,7 +14,7 @@ RgbdFrame sampleFrame(int width = 64, int height = 48);  // random colour, depth
 KeyframeData sampleKeyframe();    // keyframe 3 of map 1234: grey, depth, a measurement, a point
 MapUpdate sampleMapUpdate();      // a snapshot: acknowledgements, a keyframe, points, removals
 ComponentStatus sampleStatus();   // two counters, one timing
-PoseEstimate samplePose();        // tracking, a pose away from the origin
+PoseEstimate samplePose();        // tracking, a pose away from the origin, its map pose another, part 42
 MapReceipt sampleReceipt();       // map 1234: version 8 applied, 9 seen, keyframes 2..5 sendable
 
 // Appends one event in the LCM log format (common/lcm_log_reader.h) to 'log'; a

@@ -33,6 +33,9 @@ std::vector<uint8_t> encodePose(int64_t seq, int64_t map_id) {
   Vec6 xi;
   xi << 0.01 * seq, 0.002 * seq, -0.001 * seq, 0.001 * seq, 0.002 * seq, 0.0;
   pose.T_w_c = SE3::exp(xi);
+  // The map pose 1 m along x from the published one (a correction not yet taken in), part 5.
+  pose.map_T_w_c = SE3(pose.T_w_c.rotation(), pose.T_w_c.translation() + Vec3(1.0, 0.0, 0.0));
+  pose.part = 5;
   pose.state = TrackingState::kTracking;
   pose.points_tracked = 100;
   pose.quality = 0.9;

@@ -424,7 +424,7 @@ TEST(Tracker, GoesBackIntoThePartItLeftWhenItSeesItAgain) {
       if (tracker.rejoins() > rejoins && !back) back = i;
       if (back && i > *back) {
         ASSERT_EQ(result.status, Status::kTracked) << "frame " << i;
-        EXPECT_LT(positionError(result.map_T_w_c, i), 0.05) << "frame " << i << ", back in the room's part";
+        EXPECT_LT(positionError(result.pose.map_T_w_c, i), 0.05) << "frame " << i << ", back in the room's part";
         EXPECT_LT((result.pose.T_w_c.translation() - last.pose.T_w_c.translation()).norm(), 0.05)
             << "frame " << i << ": the published pose jumped";
       }
@@ -436,7 +436,7 @@ TEST(Tracker, GoesBackIntoThePartItLeftWhenItSeesItAgain) {
       EXPECT_EQ(tracker.rejoins(), 0);
       EXPECT_GT(tracker.rejoinTries(), 0);
     } else if (every == 0) {
-      EXPECT_GT(positionError(last.map_T_w_c, 299), 0.1) << "the new part's frame is the coasted guess";
+      EXPECT_GT(positionError(last.pose.map_T_w_c, 299), 0.1) << "the new part's frame is the coasted guess";
       EXPECT_FALSE(back);
       EXPECT_EQ(tracker.rejoins(), 0);
     } else {
@@ -704,7 +704,7 @@ TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
     ASSERT_EQ(result.status, Status::kTracked) << "frame " << i;
     // The map pose carries the shift; the published one steps by the camera's own motion
     // (within the tracking error) plus at most one frame's share of the correction.
-    EXPECT_LT(positionError(SE3(result.map_T_w_c.rotation(), result.map_T_w_c.translation() - shift), i), 0.01);
+    EXPECT_LT(positionError(SE3(result.pose.map_T_w_c.rotation(), result.pose.map_T_w_c.translation() - shift), i), 0.01);
     const Vec3 published = result.pose.T_w_c.translation();
     const Vec3 truth_step = (room().groundTruthPose(0).inverse() * room().groundTruthPose(i)).translation() -
                             (room().groundTruthPose(0).inverse() * room().groundTruthPose(i - 1)).translation();
@@ -718,7 +718,7 @@ TEST_F(TrackerMapUpdateTest, PublishesAMapCorrectionWithoutAJump) {
   // 55 frames at 3.3 mm: all of the 10 cm is in.
   const TrackResult settled = tracker_.track(roomFrame(61));
   EXPECT_EQ(settled.correction_m, 0.0);
-  EXPECT_LT((settled.pose.T_w_c.translation() - settled.map_T_w_c.translation()).norm(), 1e-9);
+  EXPECT_LT((settled.pose.T_w_c.translation() - settled.pose.map_T_w_c.translation()).norm(), 1e-9);
 }
 
 // The same 10 cm correction published at once (correction rate 0): the published pose jumps,
@@ -738,7 +738,7 @@ TEST(Tracker, ReportsAStepAgainstTheMotionDodgy) {
   ASSERT_TRUE(tracker.applyMap(wholeMapShiftedForTrackerTest(tracker.map(), Vec3(0.10, 0.0, 0.0))));
   const TrackResult jump = tracker.track(roomFrame(6));
   ASSERT_EQ(jump.status, Status::kTracked);
-  EXPECT_LT((jump.pose.T_w_c.translation() - jump.map_T_w_c.translation()).norm(), 1e-9);  // published at once
+  EXPECT_LT((jump.pose.T_w_c.translation() - jump.pose.map_T_w_c.translation()).norm(), 1e-9);  // published at once
   EXPECT_GT((jump.pose.T_w_c.translation() - before.pose.T_w_c.translation()).norm(), 0.08);  // a jump
   EXPECT_LT(jump.pose_sigma_m * 3.0 * std::sqrt(2.0), 0.02);  // the fit alone would call it good
   EXPECT_EQ(jump.pose.state, TrackingState::kDodgy);
@@ -793,7 +793,7 @@ TEST(Tracker, TrackPoseThenFinishFrameIsTrack) {
     EXPECT_EQ(a.new_keyframe->id, b.new_keyframe->id);
     EXPECT_TRUE(samePose(a.new_keyframe->T_w_c, b.new_keyframe->T_w_c));
     // The frame's pose in the map, not the published one (which takes in corrections).
-    EXPECT_TRUE(samePose(b.new_keyframe->T_w_c, b.map_T_w_c)) << "frame " << i;
+    EXPECT_TRUE(samePose(b.new_keyframe->T_w_c, b.pose.map_T_w_c)) << "frame " << i;
     EXPECT_EQ(b.new_keyframe->utime, roomFrame(i).utime);
     EXPECT_EQ(a.new_keyframe->new_points.size(), b.new_keyframe->new_points.size());
     EXPECT_EQ(a.new_keyframe->measurements.size(), b.new_keyframe->measurements.size());

@@ -192,7 +192,7 @@ class Tracker::Impl {
     if (late) result.new_keyframe = std::move(late);  // trackFrame makes one only when it initialises
     publish(&result, frame.utime);
     result.keyframe_due = pending_keyframe_.has_value();
-    result.part = part_;
+    result.pose.part = part_;
     stamp(&result, frame, start);
     return result;
   }
@@ -1493,7 +1493,7 @@ void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
   } else {
     offset_.rotation = Eigen::Quaterniond::Identity().slerp(1.0 - rate_rad * dt_s / angle, offset_.rotation);
   }
-  result->map_T_w_c = result->pose.T_w_c;
+  result->pose.map_T_w_c = result->pose.T_w_c;
   if (result->status != TrackStatus::kTracked && result->status != TrackStatus::kRelocalised &&
       result->status != TrackStatus::kLost) {
     published_history_.clear();
@@ -1501,7 +1501,7 @@ void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
   }
   if (const Keyframe* anchor = anchor_ ? replica_.map().keyframe(anchor_->id) : nullptr) {
     result->anchor = anchor->id;
-    result->T_anchor_c = anchor->T_w_c.inverse() * result->map_T_w_c;
+    result->T_anchor_c = anchor->T_w_c.inverse() * result->pose.map_T_w_c;
   }
   result->pose.T_w_c = published(result->pose.T_w_c);
   holdStepAgainstMotion(result, utime);

@@ -29,7 +29,16 @@ inline const char* toString(TrackingState state) {
 struct PoseEstimate {
   int64_t utime = 0;     // the frame's acquisition time [us]
   int64_t seq = 0;       // the frame's sequence number
+  // The published pose: the map's corrections (bundle adjustment, loop closures, a part
+  // joined to another) taken in at most at TrackerOptions::correction_rate_*, so that it
+  // never jumps.
   SE3 T_w_c;
+  // The pose in the map as it is now, corrections and all (it jumps when the map is
+  // corrected); T_w_c's distance from it is the correction not yet taken in.
+  SE3 map_T_w_c;
+  // The part of the map the pose is in (Keyframe::part, as the tracker knew it then; 0: the
+  // map's start). Another part's place in the world is a guess until the ground joins it.
+  int64_t part = 0;
   TrackingState state = TrackingState::kInitialising;
   int points_tracked = 0;
   double quality = 0.0;     // fraction of searched points found [0, 1]

@@ -293,20 +293,16 @@ struct TrackResult {
   // This frame started a new part of the map (TrackerOptions::new_part_after_failures): its
   // keyframe is new_keyframe, its pose (dodgy) where the camera coasted to since the loss.
   bool new_part = false;
-  // The part of the map the pose is in (Keyframe::part, as the tracker knew it then).
-  KeyframeId part = 0;
   // The pose fit's 1-sigma uncertainty (largest axis) of the camera centre and of the
   // orientation, from its measurements' noise models; infinite when the fit had none.
   double pose_sigma_m = INFINITY;    // [m]
   double pose_sigma_deg = INFINITY;  // [deg]
-  // pose.T_w_c is the published pose: the map pose with the part of the map's corrections
-  // not yet taken in (TrackerOptions::correction_rate_*). map_T_w_c is the pose in the map
-  // as it is now; correction_* how far the published pose is from it.
-  SE3 map_T_w_c;
+  // How far the published pose (pose.T_w_c) is from the pose in the map (pose.map_T_w_c):
+  // the map's corrections not yet taken in (TrackerOptions::correction_rate_*).
   double correction_m = 0.0;    // [m]
   double correction_deg = 0.0;  // [deg]
   // The keyframe the pose rests on (the source of most points found, else the nearest in the
-  // part) and map_T_w_c relative to it: what re-expresses the pose in the map as it ends up
+  // part) and pose.map_T_w_c relative to it: what re-expresses the pose in the map as it ends up
   // (rgbd-slam's final-map trajectory, as ORB-SLAM2 writes its own). -1: no pose, or none.
   KeyframeId anchor = -1;
   SE3 T_anchor_c;
