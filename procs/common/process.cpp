@@ -115,6 +115,12 @@ void printMapParts(const MapParts& parts) {
   std::printf("map_parts_started %ld\nmap_parts_joined %ld\nmap_parts %d\n", parts.started, parts.joined, parts.now);
 }
 
+void printAnchors(const AnchorCounts& anchors) {
+  std::printf("keyframes_placed_by_anchor %ld\nkeyframes_placed_by_stand_in %ld\nkeyframes_anchor_missing %ld\n"
+              "keyframes_anchor_refused %ld\n",
+              anchors.placed, anchors.stand_in, anchors.missing, anchors.refused);
+}
+
 void printLoopClosures(const LoopClosureCounters& loops) {
   std::printf("loop_queries %ld\nloops_recognised %ld\nloops_agreed %ld\nloops_closed %ld\nloops_refused %ld\n"
               "loops_beyond_drift %ld\nloops_ambiguous %ld\n",

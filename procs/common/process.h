@@ -45,6 +45,8 @@ void printKeyframesKept(const KeyframesKept& kept);
 void printLoopClosures(const LoopClosureCounters& loops);
 // The mapper's parts (mapper.h, "Parts"): started, joined by the loop closer, in the map now.
 void printMapParts(const MapParts& parts);
+// keyframes_placed_by_anchor, _by_stand_in, keyframes_anchor_missing, _refused (mapper.h).
+void printAnchors(const AnchorCounts& anchors);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.

@@ -136,7 +136,8 @@ void MapperNode::workerLoop() {
         }
         if (step->result.anchor_moved_m > kLogAnchorMoveM || step->result.anchor_moved_deg > kLogAnchorTurnDeg) {
           std::cerr << "rgbd-mapper: keyframe " << step->id << " came " << step->result.anchor_moved_m << " m, "
-                    << step->result.anchor_moved_deg << " deg off the map: moved with its anchor keyframe\n";
+                    << step->result.anchor_moved_deg << " deg off the map: moved with its anchor keyframe"
+                    << (step->result.anchor_stand_in ? " (culled: with the keyframe that stood in for it)" : "") << "\n";
         }
         if (step->result.anchor_missing || step->result.anchor_refused) {
           std::cerr << "rgbd-mapper: keyframe " << step->id << " taken at its pose as it came: its anchor keyframe is "
@@ -255,6 +256,7 @@ void MapperNode::printSummary() const {
   std::cerr << "\n";
   printLoopClosures(mapper_.loopClosures());  // the worker has stopped
   printMapParts(mapper_.parts());
+  printAnchors(mapper_.anchors());
   std::printf("keyframes_in_map %zu\nkeyframes_culled %ld\n", mapper_.map().numKeyframes(), mapper_.keyframesCulled());
   printKeyframesKept(mapper_.keyframesKept());
   printPeakRss();  // stdout, as the tracker's and rgbd-slam's summaries

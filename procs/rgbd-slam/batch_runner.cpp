@@ -328,6 +328,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   std::printf("map_correction_max_m %.4f\n", max_correction_m_);
   printLoopClosures(slam_->mapper().loopClosures());  // the mapper has finished
   printMapParts(slam_->mapper().parts());
+  printAnchors(slam_->mapper().anchors());
   std::printf("keyframes_culled %ld\nkeyframes_in_map %zu\n", slam_->mapper().keyframesCulled(),
               slam_->mapper().map().numKeyframes());
   printKeyframesKept(slam_->mapper().keyframesKept());

@@ -270,6 +270,39 @@ TEST(Mapper, AKeyframeMovesWithItsAnchorIntoTheMapAsItIsNow) {
   }
 }
 
+// A keyframe anchored to a keyframe the mapper has culled since (the tracker learns of a cull
+// with the next map update): it moves with the culled keyframe's stand-in, through a chain
+// of two when the stand-in was culled too.
+TEST(Mapper, AKeyframeWhoseAnchorWasCulledMovesWithItsStandIn) {
+  const Sequence seq = makeSequence(SlamMode::kDepthBa, 6);
+  const SE3 stale_from_now(Mat3(expSO3(Vec3(0.0, 40.0 * kDegree, 0.0))), Vec3(1.5, 0.0, -0.5));
+  for (const int culled : {1, 2}) {
+    Mapper mapper(seq.camera, MapperOptions{}, SlamMode::kDepthBa);
+    for (int k = 0; k < 5; ++k) ASSERT_EQ(mapper.addKeyframe(seq.keyframes[k]).status, MapperResult::Status::kIntegrated);
+    const SE3 T_w_4 = mapper.map().keyframe(4)->T_w_c;
+    mapper.removeKeyframes({4});
+    if (culled == 2) mapper.removeKeyframes({3});  // keyframe 4's stand-in (the nearest) culled too
+    ASSERT_FALSE(mapper.map().hasKeyframe(4));
+    KeyframeData stale = seq.keyframes[5];
+    stale.T_w_c = stale_from_now * stale.T_w_c;
+    for (MapPointData& p : stale.new_points) p.p_w = stale_from_now * p.p_w;
+    stale.anchor = 4;
+    stale.T_w_anchor = stale_from_now * T_w_4;
+    const MapperResult result = mapper.addKeyframe(stale);
+    ASSERT_EQ(result.status, MapperResult::Status::kIntegrated) << result.error;
+    const double error_m = (mapper.map().keyframe(5)->T_w_c.translation() - seq.truth[5].translation()).norm();
+    std::printf("anchor culled (%d in the chain): moved %.3f m %.1f deg with its stand-in, %.4f m from the truth\n",
+                culled, result.anchor_moved_m, result.anchor_moved_deg, error_m);
+    EXPECT_TRUE(result.anchor_stand_in);
+    EXPECT_FALSE(result.anchor_missing);
+    EXPECT_NEAR(result.anchor_moved_deg, 40.0, 1.0);
+    EXPECT_LT(error_m, 0.01);
+    EXPECT_EQ(mapper.anchors().stand_in, 1);
+    EXPECT_GE(mapper.anchors().placed, 1);
+    EXPECT_EQ(mapper.anchors().missing, 0);
+  }
+}
+
 // In mono every point comes from epipolar search; a keyframe searches against a second
 // partner for the corners the first one could not triangulate (epipolar_partners_mono).
 TEST(Mapper, MonoKeyframeTriangulatesAgainstMorePartners) {

@@ -212,6 +212,7 @@ void removeKeyframe(Map* map, KeyframeId id, std::set<std::pair<PointId, Keyfram
     map->removePoint(pid);
     result->removed_points.push_back(pid);
   }
+  result->removed_poses.emplace_back(kf->T_w_c, kf->part);
   map->removeKeyframe(id);
   for (PointId pid : measured) {
     if (map->point(pid) && map->observers(pid).empty()) {

@@ -7,7 +7,9 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <set>
+#include <unordered_map>
 #include <utility>
 
 #include "rgbdslam/mapping/ba_problem.h"
@@ -72,6 +74,7 @@ class Mapper::Impl {
   const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
   long keyframesCulled() const { return keyframes_culled_; }
   MapParts parts() const;
+  const AnchorCounts& anchors() const { return anchors_; }
   KeyframesKept keyframesKept() const { return rgbdslam::keyframesKept(map_, modeCullOptions()); }
   void removeKeyframes(const std::vector<KeyframeId>& ids);
 
@@ -91,6 +94,8 @@ class Mapper::Impl {
   void integrate(const KeyframeData& data, MapperResult* result);
   KeyframeId partOf(const KeyframeData& data) const;
   SE3 anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const;
+  std::optional<SE3> anchorPoseNow(KeyframeId anchor, KeyframeId part, bool* via_stand_in) const;
+  void rememberStandIns(const KeyframeCullResult& culled);
   void addPoint(const MapPoint& point);
   void addMeasurement(KeyframeId kf, Measurement m);
   KeyframeId epipolarPartner(const Keyframe& kf) const;
@@ -120,8 +125,20 @@ class Mapper::Impl {
   std::vector<KeyframeId> added_since_keyframe_cull_;
   long keyframes_culled_ = 0;
   long parts_started_ = 0;  // keyframes that started a part (not keyframe 0's)
+  AnchorCounts anchors_;
   int keyframes_since_global_ba_ = 0;
   MapChanges changes_;  // since the last takeChanges()
+  // A culled keyframe's stand-in (anchorMove): the nearest keyframe of its part that stayed,
+  // and the culled keyframe's pose relative to it then. The tracker anchors keyframes to
+  // keyframes of its replica, which learns of a cull only with the next map update (an
+  // outage delays it by its length), so a keyframe can come anchored to one culled since.
+  // The newest kMaxStandIns are kept, the oldest dropped first.
+  struct StandIn {
+    KeyframeId by = -1;
+    SE3 T_by_culled;
+  };
+  std::unordered_map<KeyframeId, StandIn> stand_ins_;
+  std::deque<KeyframeId> stand_in_order_;  // oldest first
   bool changed_in_call_ = false;  // refine(): this call changed the map
 };
 
@@ -178,6 +195,11 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
   const SE3 T_w_c = moved * data.T_w_c;
   result->anchor_moved_m = (T_w_c.translation() - data.T_w_c.translation()).norm();
   result->anchor_moved_deg = T_w_c.rotation().angularDistance(data.T_w_c.rotation()) * 180.0 / M_PI;
+  anchors_.placed += options_.move_with_anchor && data.anchor >= 0 && !data.new_part && !result->anchor_missing &&
+                     !result->anchor_refused;
+  anchors_.stand_in += result->anchor_stand_in;
+  anchors_.missing += result->anchor_missing;
+  anchors_.refused += result->anchor_refused;
   KeyframeData bare;  // the image content only; points and measurements are added checked
   bare.utime = data.utime, bare.map_id = data.map_id, bare.id = data.id, bare.T_w_c = T_w_c;
   bare.grey = data.grey, bare.depth = data.depth, bare.depth_scale = data.depth_scale;
@@ -212,12 +234,14 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
 // protocol's bound alone and together with the keyframe's does not); else none.
 SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const {
   if (!options_.move_with_anchor || data.anchor < 0 || data.new_part) return SE3();
-  const Keyframe* anchor = map_.keyframe(data.anchor);
-  if (!anchor || anchor->part != part) {
+  bool via_stand_in = false;
+  const std::optional<SE3> anchor = anchorPoseNow(data.anchor, part, &via_stand_in);
+  if (!anchor) {
     result->anchor_missing = true;
     return SE3();
   }
-  const SE3 moved = anchor->T_w_c * data.T_w_anchor.inverse();
+  result->anchor_stand_in = via_stand_in;
+  const SE3 moved = *anchor * data.T_w_anchor.inverse();
   const auto inWorld = [](const Vec3& p) { return p.cwiseAbs().maxCoeff() <= kWorldBoundM; };
   bool within = inWorld((moved * data.T_w_c).translation());
   for (const MapPointData& p : data.new_points) within = within && inWorld(moved * p.p_w);
@@ -226,6 +250,46 @@ SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperRe
     return SE3();
   }
   return moved;
+}
+
+// The anchor keyframe's pose in the map now: its own, or if it was culled, where its
+// stand-in (and its stand-in's, if that was culled too) carried it. None when it is in no
+// record or in another part.
+std::optional<SE3> Mapper::Impl::anchorPoseNow(KeyframeId anchor, KeyframeId part, bool* via_stand_in) const {
+  SE3 T_by_anchor;  // the anchor relative to the keyframe reached so far
+  KeyframeId id = anchor;
+  for (size_t step = 0; step <= stand_ins_.size(); ++step) {  // each record is followed once at most
+    if (const Keyframe* kf = map_.keyframe(id)) {
+      if (kf->part != part) return std::nullopt;
+      return *via_stand_in ? kf->T_w_c * T_by_anchor : kf->T_w_c;  // (a product renormalises)
+    }
+    const auto it = stand_ins_.find(id);
+    if (it == stand_ins_.end()) return std::nullopt;
+    T_by_anchor = it->second.T_by_culled * T_by_anchor;
+    id = it->second.by;
+    *via_stand_in = true;
+  }
+  return std::nullopt;
+}
+
+// Bounded by the keyframes a flight culls while a keyframe can be on its way: the 10-minute
+// flight culls about 75 a minute (1056 made, 301 kept), so 2048 cover more than 25 minutes of
+// outage, at about 100 bytes each.
+constexpr size_t kMaxStandIns = 2048;
+
+void Mapper::Impl::rememberStandIns(const KeyframeCullResult& culled) {
+  for (size_t i = 0; i < culled.removed_keyframes.size() && i < culled.removed_poses.size(); ++i) {
+    const auto& [T_w_culled, part] = culled.removed_poses[i];
+    const std::vector<KeyframeId> nearest = map_.nearestKeyframesInPart(T_w_culled, 1, part);
+    if (nearest.empty()) continue;
+    const KeyframeId id = culled.removed_keyframes[i];
+    stand_ins_[id] = StandIn{nearest.front(), map_.keyframe(nearest.front())->T_w_c.inverse() * T_w_culled};
+    stand_in_order_.push_back(id);
+  }
+  while (stand_in_order_.size() > kMaxStandIns) {
+    stand_ins_.erase(stand_in_order_.front());
+    stand_in_order_.pop_front();
+  }
 }
 
 // The part a keyframe joins (mapper.h, "Parts"): a new one when it says so (the tracker
@@ -459,6 +523,7 @@ void Mapper::Impl::removeKeyframes(const std::vector<KeyframeId>& ids) {
 
 void Mapper::Impl::noteRemoval(const KeyframeCullResult& culled) {
   if (culled.removed_keyframes.empty()) return;
+  rememberStandIns(culled);
   for (KeyframeId id : culled.removed_keyframes) {
     changes_.keyframes.erase(id);
     changes_.removed_keyframes.insert(id);
@@ -514,6 +579,7 @@ const Map& Mapper::map() const { return impl_->map(); }
 const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
 long Mapper::keyframesCulled() const { return impl_->keyframesCulled(); }
 MapParts Mapper::parts() const { return impl_->parts(); }
+const AnchorCounts& Mapper::anchors() const { return impl_->anchors(); }
 KeyframesKept Mapper::keyframesKept() const { return impl_->keyframesKept(); }
 void Mapper::removeKeyframes(const std::vector<KeyframeId>& ids) { impl_->removeKeyframes(ids); }
 

@@ -98,6 +98,7 @@ std::vector<PointId> cullDivergedPoints(Map* map, const std::vector<PointId>& ca
 
 struct KeyframeCullResult {
   std::vector<KeyframeId> removed_keyframes;  // in the order removed
+  std::vector<std::pair<SE3, KeyframeId>> removed_poses;  // each one's pose and part then, in that order
   std::vector<PointId> resourced_points;      // now described by another keyframe's patch
   std::vector<PointId> removed_points;        // measured in no other keyframe
 };

@@ -140,6 +140,7 @@ struct MapperResult {
   double anchor_moved_m = 0.0;    // how far the keyframe was moved with its anchor ("Anchor") [m]
   double anchor_moved_deg = 0.0;  // ...and turned [deg]
   bool anchor_missing = false;    // its anchor is not in the map (culled) or not in its part: taken as it came
+  bool anchor_stand_in = false;   // its anchor was culled: moved with the keyframe that stood in for it ("Anchor")
   bool anchor_refused = false;    // the anchor's move would put it beyond the world: taken as it came
   double integrate_ms = 0.0, local_ba_ms = 0.0;
   LoopClosureResult loop;        // the loop closer's verdict on this keyframe
@@ -151,6 +152,14 @@ struct MapParts {
   long started = 0;  // keyframes that started a part (keyframe 0 not counted)
   long joined = 0;   // parts the loop closer joined to another
   int now = 0;       // parts in the map now (1: one connected map)
+};
+
+// What the keyframes' anchors did (MapperResult::anchor_*), counted over the run.
+struct AnchorCounts {
+  long placed = 0;    // placed through their anchor (moved by what it moved since, maybe nothing)
+  long stand_in = 0;  // ...of which through a culled anchor's stand-in
+  long missing = 0;   // anchor in no record or in another part: taken as they came
+  long refused = 0;   // the move would leave the world: taken as they came
 };
 
 class Mapper {
@@ -165,6 +174,7 @@ class Mapper {
   const LoopClosureCounters& loopClosures() const;
   long keyframesCulled() const;  // redundant keyframes removed so far
   MapParts parts() const;
+  const AnchorCounts& anchors() const;
   KeyframesKept keyframesKept() const;  // why the map's keyframes stay (map_maintenance.h)
   // Removes the keyframes as culling would, unjudged (a restart repeating its journal's culls).
   void removeKeyframes(const std::vector<KeyframeId>& ids);
