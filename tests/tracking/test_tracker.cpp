@@ -437,6 +437,10 @@ TEST(Tracker, GoesBackIntoThePartItLeftWhenItSeesItAgain) {
       EXPECT_GT(tracker.rejoinTries(), 0);
     } else if (every == 0) {
       EXPECT_GT(positionError(last.pose.map_T_w_c, 299), 0.1) << "the new part's frame is the coasted guess";
+      EXPECT_EQ(last.pose.part, static_cast<KeyframeId>(tracker.map().keyframes().rbegin()->second->part));
+      EXPECT_NE(last.pose.part, 0) << "in the new part";
+      ASSERT_EQ(tracker.track(black).status, Status::kLost);
+      EXPECT_EQ(tracker.passLost(roomFrame(299)).pose.part, last.pose.part) << "a passed frame names its part too";
       EXPECT_FALSE(back);
       EXPECT_EQ(tracker.rejoins(), 0);
     } else {

@@ -229,7 +229,7 @@ void Mapper::Impl::integrate(const KeyframeData& data, MapperResult* result) {
 }
 
 // Tracked against the map as the tracker had it: the move of its anchor since ("Anchor"), if
-// the anchor is in the map, in the part the keyframe joins, and the move keeps the keyframe
+// the anchor is in the map (or culled with a stand-in on record), in the part the keyframe joins, and the move keeps the keyframe
 // and its points within the world (a sender can name an anchor pose that passes the
 // protocol's bound alone and together with the keyframe's does not); else none.
 SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperResult* result) const {
@@ -240,7 +240,6 @@ SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperRe
     result->anchor_missing = true;
     return SE3();
   }
-  result->anchor_stand_in = via_stand_in;
   const SE3 moved = *anchor * data.T_w_anchor.inverse();
   const auto inWorld = [](const Vec3& p) { return p.cwiseAbs().maxCoeff() <= kWorldBoundM; };
   bool within = inWorld((moved * data.T_w_c).translation());
@@ -249,6 +248,7 @@ SE3 Mapper::Impl::anchorMove(const KeyframeData& data, KeyframeId part, MapperRe
     result->anchor_refused = true;
     return SE3();
   }
+  result->anchor_stand_in = via_stand_in;
   return moved;
 }
 
@@ -272,9 +272,9 @@ std::optional<SE3> Mapper::Impl::anchorPoseNow(KeyframeId anchor, KeyframeId par
   return std::nullopt;
 }
 
-// Bounded by the keyframes a flight culls while a keyframe can be on its way: the 10-minute
-// flight culls about 75 a minute (1056 made, 301 kept), so 2048 cover more than 25 minutes of
-// outage, at about 100 bytes each.
+// Counted in culls: a keyframe can come anchored to a keyframe culled up to this many culls
+// ago. The 10-minute flight culls about 75 a minute (1056 made, 301 left in the map), so
+// 2048 cover more than 25 minutes of culling behind the tracker, at about 150 bytes each.
 constexpr size_t kMaxStandIns = 2048;
 
 void Mapper::Impl::rememberStandIns(const KeyframeCullResult& culled) {

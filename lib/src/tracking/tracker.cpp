@@ -192,7 +192,6 @@ class Tracker::Impl {
     if (late) result.new_keyframe = std::move(late);  // trackFrame makes one only when it initialises
     publish(&result, frame.utime);
     result.keyframe_due = pending_keyframe_.has_value();
-    result.pose.part = part_;
     stamp(&result, frame, start);
     return result;
   }
@@ -1494,6 +1493,7 @@ void Tracker::Impl::publish(TrackResult* result, int64_t utime) {
     offset_.rotation = Eigen::Quaterniond::Identity().slerp(1.0 - rate_rad * dt_s / angle, offset_.rotation);
   }
   result->pose.map_T_w_c = result->pose.T_w_c;
+  result->pose.part = part_;
   if (result->status != TrackStatus::kTracked && result->status != TrackStatus::kRelocalised &&
       result->status != TrackStatus::kLost) {
     published_history_.clear();

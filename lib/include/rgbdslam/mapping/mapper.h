@@ -34,9 +34,10 @@
 // keyframe names the
 // keyframe its pose rests on and that keyframe's pose then (KeyframeData::anchor); if the
 // anchor is in the map, the new keyframe and its provisional points move by what the anchor
-// has moved since (MapperResult::anchor_moved_*). Without it (a part's first keyframe, an
-// anchor culled since or in another part, a move that would leave the world bound), the pose
-// is taken as it comes.
+// has moved since (MapperResult::anchor_moved_*); an anchor culled since is reached through
+// the keyframe that stood in for it when it was culled (the newest 2048 culls are on record).
+// Without it (a part's first keyframe, an anchor in no record or in another part, a move
+// that would leave the world bound), the pose is taken as it comes.
 // Outliers: after every BA, a measurement judged an outlier in 2-D is queued for removal at
 // the next culling; a depth reading judged an outlier is dropped at once (depth set to 0),
 // keeping the 2-D measurement.
@@ -139,7 +140,7 @@ struct MapperResult {
   int epipolar_points = 0;       // points added by epipolar search
   double anchor_moved_m = 0.0;    // how far the keyframe was moved with its anchor ("Anchor") [m]
   double anchor_moved_deg = 0.0;  // ...and turned [deg]
-  bool anchor_missing = false;    // its anchor is not in the map (culled) or not in its part: taken as it came
+  bool anchor_missing = false;    // its anchor is in neither the map nor the culls' record, or not in its part: taken as it came
   bool anchor_stand_in = false;   // its anchor was culled: moved with the keyframe that stood in for it ("Anchor")
   bool anchor_refused = false;    // the anchor's move would put it beyond the world: taken as it came
   double integrate_ms = 0.0, local_ba_ms = 0.0;
