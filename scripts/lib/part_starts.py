@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Where each new part of the map started, against the truth: for every "a new part of the
 map started" line in a suite run's tracker.err, the last pose before the loss and the
-first published pose of the part, each relative to the other, in the estimate and in the
+first pose the part published (the first frame after the start not answered lost), each relative to the other, in the estimate and in the
 ground truth. "truth moved" is how far the camera went and turned while lost; "start off"
 is how far the part's first pose is from where it should be relative to the last pose
 (what a join must correct, before any drift within the part).
@@ -45,7 +45,8 @@ def main():
     with open(run + "/trajectory.csv") as f:
         for row in csv.DictReader(f):
             try:
-                estimate[int(row["seq"])] = (int(row["utime"]), [float(row[k]) for k in ("tx", "ty", "tz", "qx", "qy", "qz", "qw")])
+                estimate[int(row["seq"])] = (int(row["utime"]), [float(row[k]) for k in ("tx", "ty", "tz", "qx", "qy", "qz", "qw")],
+                                             row["state"])
             except (KeyError, ValueError, TypeError):
                 continue  # a line cut when the logger was stopped
     truth = {}
@@ -57,25 +58,27 @@ def main():
             truth[round(v[0], 4)] = v[1:]
     pattern = re.compile(r"frame (\d+): a new part .* after (\d+) lost frames \(lost at frame (\d+)")
     with open(run + "/tracker.err") as f:
-        for line in f:
-            m = pattern.search(line)
-            if not m:
-                continue
-            start, lost = int(m.group(1)), int(m.group(3))
-            before = [k for k in estimate if k <= lost]
-            after = [k for k in estimate if k > start]
-            if not before or not after:
-                continue
-            a, b = estimate[max(before)], estimate[min(after)]
-            ta, tb = truth.get(round(a[0] / 1e6, 4)), truth.get(round(b[0] / 1e6, 4))
-            if ta is None or tb is None:
-                print("part at frame %d: no ground truth at its poses" % start)
-                continue
-            te, re_ = relative(a[1], b[1])
-            tt, rt = relative(ta, tb)
-            print("part at frame %d: last pose %d, first %d; truth moved %.2f m %.1f deg; start off %.2f m %.1f deg"
-                  % (start, max(before), min(after), math.dist(tt, [0, 0, 0]), angle_deg(rt), math.dist(te, tt),
-                     angle_deg(transpose_times(re_, rt))))
+        starts = [(int(m.group(1)), int(m.group(3))) for m in map(pattern.search, f) if m]
+    for i, (start, lost) in enumerate(starts):
+        end = starts[i + 1][0] if i + 1 < len(starts) else float("inf")
+        before = [k for k in estimate if k <= lost]
+        # The part's first pose: the first frame after it, before the next part, that has
+        # one (rgbd-tracker answers frames lost, at the last published pose, while its
+        # relocaliser thread works).
+        after = [k for k in estimate if start < k < end and estimate[k][2] in ("tracking", "dodgy", "relocalised")]
+        if not before or not after:
+            print("part at frame %d: lost again before its first pose" % start)
+            continue
+        a, b = estimate[max(before)], estimate[min(after)]
+        ta, tb = truth.get(round(a[0] / 1e6, 4)), truth.get(round(b[0] / 1e6, 4))
+        if ta is None or tb is None:
+            print("part at frame %d: no ground truth at its poses" % start)
+            continue
+        te, re_ = relative(a[1], b[1])
+        tt, rt = relative(ta, tb)
+        print("part at frame %d: last pose %d, first %d; truth moved %.2f m %.1f deg; start off %.2f m %.1f deg"
+              % (start, max(before), min(after), math.dist(tt, [0, 0, 0]), angle_deg(rt), math.dist(te, tt),
+                 angle_deg(transpose_times(re_, rt))))
 
 
 if __name__ == "__main__":
