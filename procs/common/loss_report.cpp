@@ -30,8 +30,9 @@ std::string LossReport::update(const TrackResult& result) {
   } else if (result.new_part) {
     std::snprintf(line, sizeof(line),
                   "frame %ld: a new part of the map started after %ld lost frames (lost at frame %ld, %d points "
-                  "from depth), where the camera coasted to",
-                  seq, lost_run_, lost_since_seq_, result.pose.points_tracked);
+                  "from depth), %s",
+                  seq, lost_run_, lost_since_seq_, result.pose.points_tracked,
+                  result.part_start_reckoned ? "where depth followed the camera" : "where the camera coasted to");
     lost_since_seq_ = -1, lost_run_ = 0;
   } else if (result.status == Status::kTracked || result.status == Status::kInitialised) {
     lost_since_seq_ = -1, lost_run_ = 0;

@@ -324,6 +324,7 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
   }
   std::printf("frames_inconsistent %ld\n", inconsistent_frames_);
   std::printf("frames_depth_aided %ld\n", depth_aided_frames_);
+  std::printf("lost_frames_reckoned %ld\n", slam_->tracker().framesReckoned());
   std::printf("new_parts %ld\nparts_rejoined %ld\n", new_parts_, slam_->tracker().rejoins());
   std::printf("map_correction_max_m %.4f\n", max_correction_m_);
   printLoopClosures(slam_->mapper().loopClosures());  // the mapper has finished

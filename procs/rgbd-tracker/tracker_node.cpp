@@ -576,6 +576,7 @@ void TrackerNode::printSummary() const {
               relocalise_ms_.quantile(0.99), relocalise_ms_.quantile(1.0));
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
+  std::printf("lost_frames_reckoned %ld\n", tracker_.framesReckoned());  // the relocaliser has stopped
   std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
     std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,

@@ -43,8 +43,16 @@ TEST(LossReport, OneLinePerTransition) {
   const std::string started = report.update(part);
   EXPECT_NE(started.find("frame 12: a new part of the map started after 2 lost frames (lost at frame 9"), std::string::npos)
       << started;
+  EXPECT_NE(started.find("where the camera coasted to"), std::string::npos) << started;
   EXPECT_FALSE(report.lost());
   EXPECT_EQ(report.update(result(S::kTracked, 13)), "");
+  // A part started where depth followed the camera says so.
+  EXPECT_EQ(report.update(result(S::kLost, 14)).empty(), false);
+  TrackResult reckoned = result(S::kTracked, 20);
+  reckoned.new_part = reckoned.part_start_reckoned = true;
+  const std::string followed = report.update(reckoned);
+  EXPECT_NE(followed.find("frame 20: a new part of the map started after"), std::string::npos) << followed;
+  EXPECT_NE(followed.find("where depth followed the camera"), std::string::npos) << followed;
 }
 
 }  // namespace

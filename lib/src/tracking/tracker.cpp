@@ -1,5 +1,6 @@
 #include "rgbdslam/tracking/tracker.h"
 #include "rgbdslam/tracking/depth_alignment.h"
+#include "rgbdslam/tracking/depth_dead_reckoning.h"
 #include "rgbdslam/tracking/depth_integrity.h"
 #include "rgbdslam/tracking/photometric_integrity.h"
 #include "rgbdslam/tracking/feature_relocaliser.h"
@@ -240,6 +241,7 @@ class Tracker::Impl {
     return data;
   }
   long rejoins() const { return rejoins_; }
+  long framesReckoned() const { return frames_reckoned_; }
   long rejoinTries() const { return rejoin_tries_; }
 
   bool applyMap(const MapUpdate& update, bool defer_cold) {
@@ -309,6 +311,7 @@ class Tracker::Impl {
     last_utime_.reset();
     published_history_.clear();
     depth_reference_.reset();
+    dead_reckoning_.reset();
     pending_keyframe_.reset();
     pending_local_map_.reset();
     depth_agreeing_found_ = 0;
@@ -440,6 +443,15 @@ class Tracker::Impl {
   // attempt unchanged when depth does not hold the pose either.
   bool depthAidWanted(const Attempt& attempt, const RgbdFrame& frame) const;
   Attempt alignWithDepth(const Attempt& attempt, const RgbdFrame& frame);
+  // Appends the surfaces of the part's keyframes nearest 'T_w_c' that have them, at most
+  // DepthAlignmentOptions::keyframes of them.
+  void appendKeyframeSurfaces(const SE3& T_w_c, std::vector<SurfaceAnchor>* anchors);
+  // Lost: the dead reckoning follows the camera from the last pose (depth_dead_reckoning.h).
+  void startDeadReckoning();
+  void stepDeadReckoning(const RgbdFrame& frame);
+  // Where the camera is taken to be while lost (T_c_w): where depth followed it, else where
+  // the velocity at the loss carried it in 'coast_frames' frames.
+  SE3 lostPoseGuess(int64_t utime, int coast_frames) const;
   void updateDepthReference(const Attempt& attempt, const RgbdFrame& frame);
   // What a keyframe leaves the tracker besides its pyramid (depth modes): surface samples
   // (depth-aided tracking) and 3-D features (relocalisation from anywhere), made on the
@@ -569,13 +581,14 @@ class Tracker::Impl {
   // relocalise_max_speed_m_s); infinite when unbounded.
   double relocaliseReachM(const RgbdFrame& frame) const;
   // How far the velocity at the loss has carried the camera from the last pose [m], counted
-  // in frames as coasting counts them. No velocity known (lost right after a relocalisation,
+  // in frames as coasting counts them (or depth has, lostPoseGuess). No velocity known (lost right after a relocalisation,
   // which zeroes it): 0, the last pose is the best guess there is. Taking it as infinite
   // instead (good needed) refused right poses: the 2-minute flights' worlds 5 and 6 lost 94
   // and 303 frames in C3b whose poses had been 3.6 and 2.0 cm off on average (session 28).
-  double lostTravelM() const {
-    const SE3 coasted = SE3::exp(static_cast<double>(lost_frames_) * lost_velocity_) * T_c_w_;
-    return (coasted.inverse().translation() - T_c_w_.inverse().translation()).norm();
+  // Where depth followed the camera (depth_dead_reckoning.h), that is the travel.
+  double lostTravelM(int64_t utime) const {
+    const SE3 guess = lostPoseGuess(utime, lost_frames_);
+    return (guess.inverse().translation() - T_c_w_.inverse().translation()).norm();
   }
   bool withinReach(const SE3& T_c_w, double reach_m) const {
     return (T_c_w.inverse().translation() - T_c_w_.inverse().translation()).norm() <= reach_m;
@@ -633,6 +646,11 @@ class Tracker::Impl {
   // no pose): the motion a reported step is held against (QualityOptions::good_step_m).
   std::vector<std::pair<int64_t, Vec3>> published_history_;
   std::vector<SurfaceAnchor> anchors_;  // scratch: one frame's samples in the world
+  // Lost: the camera followed by depth from the last pose (TrackerOptions::
+  // relocalise_dead_reckoning); none in mono, with depth_align off, or before the first loss.
+  std::optional<DepthDeadReckoning> dead_reckoning_;
+  std::vector<SurfaceAnchor> reckoning_anchors_;  // scratch: the keyframes' surfaces near it
+  long frames_reckoned_ = 0;  // lost frames depth held, over the run
 
   // The last frame's work that its pose did not need, not yet done (finishFrame): its
   // keyframe, and the local map around its pose (freezing keyframes that left it, thawing
@@ -858,8 +876,7 @@ bool Tracker::Impl::addFirstKeyframe(const RgbdFrame& frame, KeyframeId id, cons
 // as dodgy: its place relative to the map before is that guess until the ground's loop
 // closer joins the part to the rest (mapper.h, "Parts").
 std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std::string* why_not) {
-  const int coast = std::min(lost_frames_, options_.relocalise_coast_frames);
-  const SE3 coasted = SE3::exp(static_cast<double>(coast) * lost_velocity_) * T_c_w_;
+  const SE3 coasted = lostPoseGuess(frame.utime, std::min(lost_frames_, options_.relocalise_coast_frames));
   const PartLeft left{T_c_w_.inverse(), last_pose_utime_.value_or(frame.utime), part_};
   TrackResult result;
   if (!addFirstKeyframe(frame, next_keyframe_id_, coasted.inverse(), &result)) {
@@ -869,6 +886,7 @@ std::optional<TrackResult> Tracker::Impl::startPart(const RgbdFrame& frame, std:
   result.status = TrackStatus::kTracked;
   result.pose.state = TrackingState::kDodgy;
   result.new_part = true;
+  result.part_start_reckoned = dead_reckoning_ && dead_reckoning_->framesHeld() > 0;
   if (!part_left_) part_left_ = left;  // a part started from a new part: bounded from the first loss
   rejoin_round_.reset();  // a round's views were ranked before this loss
   frames_since_rejoin_ = 0;
@@ -958,6 +976,7 @@ void Tracker::Impl::tryRejoin(const RgbdFrame& frame, bool real_time) {
   T_c_w_ = attempt->T_c_w;
   motion_prior_.moveWorld(correction);
   if (depth_reference_) depth_reference_->T_w_c = correction * depth_reference_->T_w_c;
+  if (dead_reckoning_) dead_reckoning_->moveWorld(correction);
   offset_.position = old_published.translation() - new_pose.translation();
   offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
   enterPart(found_part);
@@ -1090,16 +1109,20 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
       ranked.begin(), ranked.begin() + std::min<std::ptrdiff_t>(static_cast<std::ptrdiff_t>(ranked.size()),
                                                                options_.relocalise_candidates));
   // The last good pose first: after a short disturbance the camera is often still near it.
-  // Then, for TrackerOptions::relocalise_coast_frames, where the velocity at the loss
-  // carried it since (tried as a pose near the last one: fine stage first, dodgy is enough).
+  // Then where depth followed the camera to (depth_dead_reckoning.h), or else, for
+  // TrackerOptions::relocalise_coast_frames, where the velocity at the loss carried it since
+  // (tried as a pose near the last one: fine stage first, dodgy is enough).
   ++lost_frames_;
-  if (!lost_velocity_.isZero() && lost_frames_ <= options_.relocalise_coast_frames) {
-    const SE3 coasted = SE3::exp(static_cast<double>(lost_frames_) * lost_velocity_) * T_c_w_;
-    candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, coasted.inverse()});
+  stepDeadReckoning(frame);
+  // (A guess depth held long ago is tried only within the coast's frames, as the coast is.)
+  const bool reckoned = dead_reckoning_ && dead_reckoning_->heldRecently(frame.utime);
+  if (reckoned || (!lost_velocity_.isZero() && lost_frames_ <= options_.relocalise_coast_frames)) {
+    candidates.insert(candidates.begin(),
+                      RelocalisationCandidate{-1, 0.0, lostPoseGuess(frame.utime, lost_frames_).inverse()});
   }
   candidates.insert(candidates.begin(), RelocalisationCandidate{-1, 0.0, T_c_w_.inverse()});
   const double last_pose_reach_m = options_.relocalise_last_pose_reach_m;
-  const bool last_pose_in_reach = last_pose_reach_m > 0.0 && lostTravelM() <= last_pose_reach_m;
+  const bool last_pose_in_reach = last_pose_reach_m > 0.0 && lostTravelM(frame.utime) <= last_pose_reach_m;
   for (size_t i = 0; i < candidates.size(); ++i) {
     const RelocalisationCandidate& candidate = candidates[i];
     const bool near_last = candidate.keyframe < 0;
@@ -1271,13 +1294,7 @@ bool Tracker::Impl::depthAidWanted(const Attempt& attempt, const RgbdFrame& fram
 Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& frame) {
   const DepthAlignmentOptions& o = options_.depth_align;
   anchors_.clear();
-  size_t used = 0;
-  for (KeyframeId id : replica_.map().nearestKeyframesInPart(attempt.T_c_w.inverse(), 4 * static_cast<size_t>(o.keyframes), projection_part_)) {
-    const KeyframeExtras* extras = extrasOf(id);
-    if (!extras || extras->surface.empty()) continue;
-    appendAnchors(extras->surface, replica_.map().keyframe(id)->T_w_c, &anchors_);
-    if (++used >= static_cast<size_t>(o.keyframes)) break;
-  }
+  appendKeyframeSurfaces(attempt.T_c_w.inverse(), &anchors_);
   if (depth_reference_) appendAnchors(depth_reference_->samples.get(), depth_reference_->T_w_c, &anchors_);
   if (anchors_.empty()) return attempt;
   // The found points (inliers of the fine stage) with their depth, and the surfaces.
@@ -1341,6 +1358,53 @@ Attempt Tracker::Impl::alignWithDepth(const Attempt& attempt, const RgbdFrame& f
   }
   aligned.median_depth_m = median(&depths_);
   return aligned;
+}
+
+void Tracker::Impl::appendKeyframeSurfaces(const SE3& T_w_c, std::vector<SurfaceAnchor>* anchors) {
+  const size_t wanted = static_cast<size_t>(options_.depth_align.keyframes);
+  size_t used = 0;
+  for (KeyframeId id : replica_.map().nearestKeyframesInPart(T_w_c, 4 * wanted, projection_part_)) {
+    if (used >= wanted) break;
+    const KeyframeExtras* extras = extrasOf(id);
+    if (!extras || extras->surface.empty()) continue;
+    appendAnchors(extras->surface, replica_.map().keyframe(id)->T_w_c, anchors);
+    ++used;
+  }
+}
+
+void Tracker::Impl::startDeadReckoning() {
+  if (!options_.relocalise_dead_reckoning || !options_.depth_align.enabled || !depthInTracking(mode_)) {
+    dead_reckoning_.reset();
+    return;
+  }
+  if (!dead_reckoning_) {
+    dead_reckoning_.emplace(camera_, options_.depth_align, pose_options_, options_.keyframe_build.min_depth_m,
+                            options_.keyframe_build.max_depth_m, options_.relocalise_reckoning_sigma_m,
+                            options_.relocalise_reckoning_sigma_deg * M_PI / 180.0);
+  }
+  dead_reckoning_->start(motion_prior_);
+}
+
+void Tracker::Impl::stepDeadReckoning(const RgbdFrame& frame) {
+  if (!dead_reckoning_ || frame.depth.empty()) return;
+  const std::optional<SE3> predicted = dead_reckoning_->predict(frame.utime);
+  if (!predicted) return;
+  reckoning_anchors_.clear();
+  appendKeyframeSurfaces(predicted->inverse(), &reckoning_anchors_);
+  frames_reckoned_ += dead_reckoning_->step(frame, reckoning_anchors_);
+}
+
+SE3 Tracker::Impl::lostPoseGuess(int64_t utime, int coast_frames) const {
+  if (dead_reckoning_) {
+    // Coasted past the last frame held for at most relocalise_coast_frames, as from the last
+    // pose: frames counted since the loss (passed ones too) give the frames' interval.
+    const double frame_s = lost_frames_ > 0 && last_pose_utime_ && utime > *last_pose_utime_
+                               ? static_cast<double>(utime - *last_pose_utime_) * 1e-6 / lost_frames_
+                               : 0.0;
+    const int coast = std::min(coast_frames, options_.relocalise_coast_frames);
+    if (const std::optional<SE3> reckoned = dead_reckoning_->poseAt(utime, coast * frame_s)) return *reckoned;
+  }
+  return SE3::exp(static_cast<double>(coast_frames) * lost_velocity_) * T_c_w_;
 }
 
 void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
@@ -1472,6 +1536,7 @@ void Tracker::Impl::followMapCorrection(bool joined) {
   // the map's move is not the vehicle's.
   motion_prior_.moveWorld(correction);
   if (depth_reference_) depth_reference_->T_w_c = correction * depth_reference_->T_w_c;
+  if (dead_reckoning_) dead_reckoning_->moveWorld(correction);
   offset_.position = old_published.translation() - new_pose.translation();
   offset_.rotation = (old_published.rotation() * new_pose.rotation().inverse()).normalized();
 }
@@ -1549,6 +1614,7 @@ TrackResult Tracker::Impl::lostResult(const Attempt& attempt, std::string reason
   lost_frames_ = 1;  // this frame: the first relocalisation is two frames past the last pose
   failed_relocalisations_ = 0;
   velocity_.setZero();
+  startDeadReckoning();  // from the motion prior as it was at the last pose
   motion_prior_.clear();
   last_quality_ = 0.0;
   depth_reference_.reset();
@@ -1930,6 +1996,7 @@ void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); 
 bool Tracker::lost() const { return impl_->lost(); }
 long Tracker::rejoins() const { return impl_->rejoins(); }
 long Tracker::rejoinTries() const { return impl_->rejoinTries(); }
+long Tracker::framesReckoned() const { return impl_->framesReckoned(); }
 std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
 bool Tracker::applyMap(const MapUpdate& update, bool defer_cold) { return impl_->applyMap(update, defer_cold); }
 bool Tracker::applyDeferredMap(size_t max_entries) { return impl_->applyDeferredMap(max_entries); }

@@ -104,6 +104,15 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "relocalise_coast_frames", &relocalise_coast_frames, 0, 1000, "frames",
           "for this many frames after a loss also try the pose the last velocity carried the camera to "
           "(0: the last pose only)");
+  r->bind(s, "relocalise_dead_reckoning", &relocalise_dead_reckoning,
+          "while lost, follow the camera by aligning each frame's depth to the last frame's and the nearest "
+          "keyframes' surfaces from the motion prior's prediction; relocalisation and a new part start from "
+          "that pose where depth held (else from the coast)");
+  r->bind(s, "relocalise_reckoning_sigma_m", &relocalise_reckoning_sigma_m, 0.001, 100.0, "m",
+          "dead reckoning: a direction of the pose counts as held by the surfaces when they fix it within this "
+          "(1 sigma); elsewhere it follows the velocity");
+  r->bind(s, "relocalise_reckoning_sigma_deg", &relocalise_reckoning_sigma_deg, 0.01, 180.0, "deg",
+          "dead reckoning: the same for rotation");
   r->bind(s, "relocalise_last_pose_reach_m", &relocalise_last_pose_reach_m, 0.0, 1000.0, "m",
           "a pose relocalised from the last pose may be dodgy until the velocity at the loss has carried the "
           "camera this far from it; beyond, it must be good (0: always good)");

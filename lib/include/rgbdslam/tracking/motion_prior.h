@@ -115,6 +115,10 @@ class MotionPrior {
 
   bool hasPose() const { return options_.enabled && have_pose_; }
   const Vec6& velocity() const { return v_; }  // [m/s, rad/s], twist on T_c_w
+  // The last pose taken (update or reset) and its time; meaningful only with hasPose().
+  const SE3& pose() const { return T_c_w_; }
+  int64_t utime() const { return utime_; }
+  const MotionPriorOptions& options() const { return options_; }
 
  private:
   using Mat12 = Eigen::Matrix<double, 12, 12>;

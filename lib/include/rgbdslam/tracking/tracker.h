@@ -183,6 +183,20 @@ struct TrackerOptions {
   // loss the tracker also tries the pose the velocity at the loss carried it to (the flight's
   // first 720 frames: ATE 10.5 mm instead of 0.63 m). 0: the last pose only.
   int relocalise_coast_frames = 30;  // [frames]
+  // Where depth holds the lost frames, the tracker follows the camera through them by depth
+  // alone (depth_dead_reckoning.h) and tries that pose instead of the coasted one, and a new
+  // part starts there. Depth modes with depth_align on; false: the coast alone.
+  bool relocalise_dead_reckoning = true;
+  // ...where a direction counts as held by the surfaces when they fix it within these (1
+  // sigma, from their information counted as DepthAlignmentOptions::effective_samples);
+  // elsewhere it follows the velocity. Measured (2026-11-29): directions the surfaces do
+  // not fix (a corridor's slide, a wall's that leaves the view) came out at 0.2-2 m, and
+  // edge effects slid the pose along them when taken; the 2-minute flight's turn after
+  // its loss at frame 2102 (1.6 deg a frame) was fixed at 9 cm in its weakest direction,
+  // and at 5 cm / 1 deg (the tracker's own bar, quality.max_pose_sigma_*) the turn was
+  // left to the velocity: the new part started 15.2 deg off; at 0.1 m / 2 deg, 1.9 deg.
+  double relocalise_reckoning_sigma_m = 0.1;    // [m]
+  double relocalise_reckoning_sigma_deg = 2.0;  // [deg]
   // A pose found from the last pose is accepted on normal tracking's bar (dodgy is enough):
   // right after a loss the camera is still near it, and where many points are hidden for a
   // stretch (glass cabinets close by) the quality stays below good although the pose is
@@ -291,8 +305,10 @@ struct TrackResult {
   // (depth_alignment.h): the state is dodgy.
   bool depth_aided = false;
   // This frame started a new part of the map (TrackerOptions::new_part_after_failures): its
-  // keyframe is new_keyframe, its pose (dodgy) where the camera coasted to since the loss.
+  // keyframe is new_keyframe, its pose (dodgy) where the camera coasted to since the loss,
+  // or where depth followed it (then part_start_reckoned: relocalise_dead_reckoning).
   bool new_part = false;
+  bool part_start_reckoned = false;
   // The pose fit's 1-sigma uncertainty (largest axis) of the camera centre and of the
   // orientation, from its measurements' noise models; infinite when the fit had none.
   double pose_sigma_m = INFINITY;    // [m]
@@ -345,6 +361,8 @@ class Tracker {
   long rejoins() const;
   // Frames on which it tried to go back (at most one try a frame).
   long rejoinTries() const;
+  // Lost frames whose depth held the camera's dead reckoning (relocalise_dead_reckoning).
+  long framesReckoned() const;
   // Why the tracker cannot use 'frame' (no colour image, wrong size); empty: usable. Reads
   // the camera only, so a thread may call it while another tracks.
   std::string frameError(const RgbdFrame& frame) const;
