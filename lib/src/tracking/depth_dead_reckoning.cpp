@@ -68,32 +68,38 @@ bool DepthDeadReckoning::step(const RgbdFrame& frame, const std::vector<SurfaceA
   // slide fed the velocity, which fed the next slide: metres off within a second (a room's
   // corner with the camera turning away from one wall). The prediction stays in those
   // directions ("solution remapping", Zhang, Kaess and Singh, ICRA 2016). A direction is
-  // fixed where the surfaces' honest information holds it within the tracker's own bar of
-  // the bar (fixed_sigma_*): generalised eigenvalues of that information over the bar's of
-  // at least 1. (Against the prediction's information instead, the bar fell with the
-  // prediction's growing uncertainty, and edge effects passed it: 2.5 m off after 1.5 s in
-  // the same corner.)
+  // fixed where the surfaces' honest information holds it within fixed_sigma_* (1 sigma):
+  // generalised eigenvalues of that information over the bar's (bar_) of at least 1.
+  // (Against the prediction's information instead, the bar fell with the prediction's
+  // growing uncertainty, and edge effects passed it: 2.5 m off after 1.5 s in the same
+  // corner.) The move kept must lie within the prediction's 99.9 % ellipsoid.
   const Mat6 honest = planes.honestInformation(fit.extra_information, align_.effective_samples, fit.inliers_extra);
   const Eigen::GeneralizedSelfAdjointEigenSolver<Mat6> directions(0.5 * (honest + honest.transpose()), bar_);
   if (directions.info() != Eigen::Success) return false;
   const Vec6 fitted = (fit.T_c_w * predicted->T_c_w.inverse()).log();
   Vec6 off = Vec6::Zero();
   Mat6 fixed = Mat6::Zero();  // the honest information in the directions kept
+  int kept = 0;
   for (int i = 0; i < 6; ++i) {
     const double lambda = directions.eigenvalues()(i);
     if (!(lambda >= 1.0)) continue;
-    const Vec6 u = directions.eigenvectors().col(i);  // u^T information u = 1
+    const Vec6 u = directions.eigenvectors().col(i);  // u^T bar u = 1, u^T honest u = lambda
     const Vec6 b = bar_ * u;
     off += b.dot(fitted) * u;
     fixed += lambda * b * b.transpose();
+    ++kept;
   }
+  if (kept == 0) return false;  // the surfaces fix nothing: the frame tells nothing
   if (off.dot(predicted->information * off) > kChi2Dof6P999) return false;
   const SE3 T_c_w = SE3::exp(off) * predicted->T_c_w;
   prior_.update(frame.utime, T_c_w, fixed);
   // A new reference once the camera has moved on from the last one (DepthAlignmentOptions::
-  // reference_step_*), not every frame: each passes its alignment error on.
+  // reference_step_*), not every frame: each passes its alignment error on. A step of 0
+  // turns the reference off, as in depth-aided tracking: the keyframes' surfaces alone.
   const SE3 T_w_c = T_c_w.inverse();
-  if (reference_.empty() || align_.reference_step_m <= 0.0 ||
+  if (align_.reference_step_m <= 0.0) {
+    reference_.clear();
+  } else if (reference_.empty() ||
       (T_w_c.translation() - T_w_reference_.translation()).norm() >= align_.reference_step_m ||
       T_w_c.rotation().angularDistance(T_w_reference_.rotation()) >= align_.reference_step_deg * M_PI / 180.0) {
     reference_ = sampleSurface(depthToMetres(frame.depth, frame.depth_scale, min_depth_m_, max_depth_m_), camera_,
@@ -111,7 +117,8 @@ std::optional<SE3> DepthDeadReckoning::poseAt(int64_t utime, double max_coast_s)
 }
 
 bool DepthDeadReckoning::heldRecently(int64_t utime) const {
-  return held_ > 0 && static_cast<double>(utime - prior_.utime()) * 1e-6 <= prior_.options().max_gap_s;
+  return held_ > 0 && utime >= prior_.utime() &&
+         static_cast<double>(utime - prior_.utime()) * 1e-6 <= prior_.options().max_gap_s;
 }
 
 void DepthDeadReckoning::moveWorld(const SE3& T_new_old) {

@@ -1114,8 +1114,10 @@ TrackResult Tracker::Impl::relocalise(const RgbdFrame& frame) {
   // (tried as a pose near the last one: fine stage first, dodgy is enough).
   ++lost_frames_;
   stepDeadReckoning(frame);
-  // (A guess depth held long ago is tried only within the coast's frames, as the coast is.)
-  const bool reckoned = dead_reckoning_ && dead_reckoning_->heldRecently(frame.utime);
+  // (A guess depth held long ago is tried only within the coast's frames, as the coast is;
+  // relocalise_coast_frames 0 means the last pose only, whatever depth says.)
+  const bool reckoned = options_.relocalise_coast_frames > 0 && dead_reckoning_ &&
+                        dead_reckoning_->heldRecently(frame.utime);
   if (reckoned || (!lost_velocity_.isZero() && lost_frames_ <= options_.relocalise_coast_frames)) {
     candidates.insert(candidates.begin(),
                       RelocalisationCandidate{-1, 0.0, lostPoseGuess(frame.utime, lost_frames_).inverse()});

@@ -105,9 +105,9 @@ void TrackerOptions::bind(OptionRegistry* r, const std::string& s) {
           "for this many frames after a loss also try the pose the last velocity carried the camera to "
           "(0: the last pose only)");
   r->bind(s, "relocalise_dead_reckoning", &relocalise_dead_reckoning,
-          "while lost, follow the camera by aligning each frame's depth to the last frame's and the nearest "
-          "keyframes' surfaces from the motion prior's prediction; relocalisation and a new part start from "
-          "that pose where depth held (else from the coast)");
+          "while lost, follow the camera by aligning each frame's depth to a recent frame's and the nearest "
+          "keyframes' surfaces from the motion prior's prediction (needs the motion prior); relocalisation and "
+          "a new part start from that pose where depth held (else from the coast)");
   r->bind(s, "relocalise_reckoning_sigma_m", &relocalise_reckoning_sigma_m, 0.001, 100.0, "m",
           "dead reckoning: a direction of the pose counts as held by the surfaces when they fix it within this "
           "(1 sigma); elsewhere it follows the velocity");

@@ -12,15 +12,18 @@
 //
 // Model: the tracker's motion prior as it was at the last pose (motion_prior.h: the pose,
 // the velocity and their covariance) predicts each lost frame's pose. The frame's depth is
-// aligned point-to-plane (depth_alignment.h) against the surfaces of the last frame held and
-// of the map's keyframes near the prediction, with the prediction as the fit's prior, so
+// aligned point-to-plane (depth_alignment.h) against the surfaces of a recent frame held (the
+// reference, renewed every DepthAlignmentOptions::reference_step_*, as in depth-aided
+// tracking) and of the map's keyframes near the prediction, with the prediction as the fit's
+// prior, so
 // what the surfaces do not fix (the slide along a corridor's walls) follows the velocity.
 // The fit and the surfaces' honest information (PointToPlaneResiduals::honestInformation)
 // update the filter; its velocity follows by conditioning, as while tracking. In the
 // directions the surfaces do not fix, the prediction stays (see step()).
 // A frame is held when enough samples agree (DepthAlignmentOptions::min_inliers,
-// min_inlier_ratio) and the fit lies within the prediction's 99.9 % ellipsoid (chi-square,
-// 6 degrees of freedom): a fit further off settled in another basin of the surfaces. A frame
+// min_inlier_ratio), the surfaces fix at least one direction, and the move kept lies within
+// the prediction's 99.9 % ellipsoid (chi-square, 6 degrees of freedom): a fit further off
+// settled in another basin of the surfaces. A frame
 // not held leaves the filter as it was; none held for MotionPriorOptions::max_gap_s, or time
 // going back, ends the dead reckoning (the velocity is too old to follow by). The caller
 // coasts the last pose held on by the velocity, as it coasts from the last pose tracked.
@@ -29,8 +32,10 @@
 // pose a flight controller may follow: depth_alignment.h); the guess only seeds the
 // relocalisation's start and a new part's pose (tracker.cpp, lostPoseGuess).
 //
-// Cost per frame: sampleSurface of the frame once held, and a fit over the samples of at
-// most DepthAlignmentOptions::keyframes keyframes and the last frame held.
+// Needs the motion prior (MotionPriorOptions::enabled): without it nothing starts.
+//
+// Cost per frame: a fit over the samples of at most DepthAlignmentOptions::keyframes
+// keyframes and the reference, and sampleSurface of a frame that renews the reference.
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -55,7 +60,7 @@ class DepthDeadReckoning {
                      double min_depth_m, double max_depth_m, double fixed_sigma_m, double fixed_sigma_rad);
 
   // From the last pose, as the tracker's motion prior holds it there. A prior without a pose
-  // (disabled, or lost right after a relocalisation's first frame) starts nothing.
+  // (disabled) starts nothing.
   void start(const MotionPrior& at_last_pose);
   void stop();
   bool running() const { return running_; }
@@ -84,7 +89,7 @@ class DepthDeadReckoning {
   bool running_ = false;
   int held_ = 0;
   MotionPrior prior_;
-  std::vector<SurfaceSample> reference_;  // the last frame held: its surfaces, its pose
+  std::vector<SurfaceSample> reference_;  // a recent frame held: its surfaces, its pose
   SE3 T_w_reference_;
   std::vector<SurfaceAnchor> anchors_;  // scratch
 };

@@ -184,8 +184,9 @@ struct TrackerOptions {
   // first 720 frames: ATE 10.5 mm instead of 0.63 m). 0: the last pose only.
   int relocalise_coast_frames = 30;  // [frames]
   // Where depth holds the lost frames, the tracker follows the camera through them by depth
-  // alone (depth_dead_reckoning.h) and tries that pose instead of the coasted one, and a new
-  // part starts there. Depth modes with depth_align on; false: the coast alone.
+  // alone (depth_dead_reckoning.h) and tries that pose instead of the coasted one (not with
+  // relocalise_coast_frames 0), and a new part starts there. Depth modes with depth_align
+  // and the motion prior on; false: the coast alone.
   bool relocalise_dead_reckoning = true;
   // ...where a direction counts as held by the surfaces when they fix it within these (1
   // sigma, from their information counted as DepthAlignmentOptions::effective_samples);
