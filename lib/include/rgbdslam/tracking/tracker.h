@@ -195,7 +195,8 @@ struct TrackerOptions {
   // edge effects slid the pose along them when taken; the 2-minute flight's turn after
   // its loss at frame 2102 (1.6 deg a frame) was fixed at 9 cm in its weakest direction,
   // and at 5 cm / 1 deg (the tracker's own bar, quality.max_pose_sigma_*) the turn was
-  // left to the velocity: the new part started 15.2 deg off; at 0.1 m / 2 deg, 1.9 deg.
+  // left to the velocity: the new part started 15.2 deg off; at 0.1 m / 2 deg, 1.9 deg
+  // (3.1 deg once the guess coasts as far past the last frame held as the coast does).
   double relocalise_reckoning_sigma_m = 0.1;    // [m]
   double relocalise_reckoning_sigma_deg = 2.0;  // [deg]
   // A pose found from the last pose is accepted on normal tracking's bar (dodgy is enough):
