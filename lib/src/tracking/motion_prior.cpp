@@ -41,9 +41,11 @@ void MotionPriorOptions::bind(OptionRegistry* r, const std::string& s) {
   r->bind(s, "motion_prior_angular_accel_rad_s2", &angular_accel_rad_s2, 0.01, 10000.0, "rad/s^2",
           "the vehicle's random angular acceleration, one standard deviation");
   r->bind(s, "motion_prior_max_speed_m_s", &max_speed_m_s, 0.01, 1000.0, "m/s",
-          "the velocity's standard deviation when it is not known (first frame, relocalised)");
+          "the vehicle's top speed: the velocity's standard deviation when it is not known (first frame, "
+          "relocalised), and the most that dead reckoning while lost takes");
   r->bind(s, "motion_prior_max_rate_rad_s", &max_rate_rad_s, 0.01, 1000.0, "rad/s",
-          "the angular velocity's standard deviation when it is not known");
+          "the vehicle's top turn rate: the angular velocity's standard deviation when it is not known, and "
+          "the most that dead reckoning while lost takes");
   r->bind(s, "motion_prior_in_final_fit", &in_final_fit,
           "the prior stays in the fit that gives the pose (false: it only chooses the matches, "
           "whose fit without it gives the pose)");

@@ -17,13 +17,16 @@
 // tracking) and of the map's keyframes near the prediction, with the prediction as the fit's
 // prior, so
 // what the surfaces do not fix (the slide along a corridor's walls) follows the velocity.
-// The fit and the surfaces' honest information (PointToPlaneResiduals::honestInformation)
-// update the filter; its velocity follows by conditioning, as while tracking. In the
-// directions the surfaces do not fix, the prediction stays (see step()).
+// The surfaces' honest information (PointToPlaneResiduals::honestInformation) weighs the
+// fit's move against the prediction, and updates the filter; its velocity follows by
+// conditioning, as while tracking. In the directions the surfaces do not fix, the
+// prediction and the velocity stay (see step()). A velocity beyond the vehicle's top speed
+// or rate (MotionPriorOptions::max_speed_m_s, max_rate_rad_s) is not held.
 // A frame is held when enough samples agree (DepthAlignmentOptions::min_inliers,
-// min_inlier_ratio), the surfaces fix at least one direction, and the move kept lies within
-// the prediction's 99.9 % ellipsoid (chi-square, 6 degrees of freedom): a fit further off
-// settled in another basin of the surfaces. A frame
+// min_inlier_ratio), the surfaces fix at least one direction, the fit's move in the
+// directions kept lies within the prediction's 99.9 % ellipsoid (chi-square, 6 degrees of
+// freedom: a fit further off settled in another basin of the surfaces), and the velocity
+// stays within the vehicle's reach. A frame
 // not held leaves the filter as it was; none held for MotionPriorOptions::max_gap_s, or time
 // going back, ends the dead reckoning (the velocity is too old to follow by). The caller
 // coasts the last pose held on by the velocity, as it coasts from the last pose tracked.
@@ -79,6 +82,8 @@ class DepthDeadReckoning {
   // The world frame moved (a map correction while lost): new = T_new_old * old.
   void moveWorld(const SE3& T_new_old);
   int framesHeld() const { return held_; }  // since start()
+  // The velocity the filter holds (twist on T_c_w, [m/s, rad/s]); meaningful while running.
+  const Vec6& velocity() const { return prior_.velocity(); }
 
  private:
   PinholeCamera camera_;

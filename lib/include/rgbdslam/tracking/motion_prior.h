@@ -74,8 +74,10 @@ struct MotionPriorOptions {
   // camera shakes faster. Points fix rotation well almost everywhere; 20 rad/s^2 (0.6 deg a
   // frame) leaves it to them.
   double angular_accel_rad_s2 = 20.0;  // [rad/s^2]
-  double max_speed_m_s = 3.0;          // velocity's sigma after a reset [m/s]
-  double max_rate_rad_s = 3.0;         // angular velocity's sigma after a reset [rad/s]
+  // The vehicle's top speed and turn rate: the velocity's sigma after a reset, and the most
+  // the dead reckoning while lost takes (depth_dead_reckoning.h).
+  double max_speed_m_s = 3.0;   // [m/s]
+  double max_rate_rad_s = 3.0;  // [rad/s]
   double max_gap_s = 0.5;              // a longer time between two poses resets [s]
   // Frames closer in time than this are taken as the same instant (a driver's burst of
   // frames stamped on arrival): no prior, and the filter only takes the newer pose [s].
@@ -112,6 +114,9 @@ class MotionPrior {
   void moveWorld(const SE3& T_new_old) { T_c_w_ = T_c_w_ * T_new_old.inverse(); }
   // Forget everything (lost).
   void clear() { have_pose_ = false; }
+  // The velocity replaced, the covariances kept: the dead reckoning keeps the velocity where
+  // its measurement fixes nothing (depth_dead_reckoning.h).
+  void setVelocity(const Vec6& v) { v_ = v; }
 
   bool hasPose() const { return options_.enabled && have_pose_; }
   const Vec6& velocity() const { return v_; }  // [m/s, rad/s], twist on T_c_w
