@@ -182,10 +182,18 @@ TEST(DepthDeadReckoning, MovesWithTheWorld) {
 // the slide along it nor the roll about its normal.
 const std::vector<Plane> kWall = {{Vec3(0, 0, 1), 3.0}};
 
-// Towards the wall at 0.3 m/s, turning away from it at 0.15 rad/s about the vertical.
+// Towards the wall at 0.3 m/s, turning at 0.15 rad/s about the vertical up to the loss at
+// k = 0; then, within 0.5 s, a stop and the turn reversed (-0.15 rad/s): the wall must
+// correct the velocity at the loss in the directions it fixes.
 SE3 towardsTheWall(int k) {
   const double t = k * kFrameS;
-  return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(0.15 * t, Vec3::UnitY())), Vec3(0.0, 0.0, 0.3 * t));
+  double z = 0.3 * t, yaw = 0.15 * t;
+  if (t > 0.0) {
+    const double ramp = std::min(t, 0.5);
+    z = 0.3 * ramp - 0.3 * ramp * ramp;
+    yaw = 0.15 * ramp - 0.3 * ramp * ramp - 0.15 * std::max(0.0, t - 0.5);
+  }
+  return SE3(Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Vec3::UnitY())), Vec3(0.0, 0.0, z));
 }
 
 // Frame k with a structured-light sensor's depth noise: 2.5 mm at 1 m, growing with the
@@ -219,21 +227,29 @@ Vec6 truthVelocity(SE3 (*path)(int), int k) { return (path(k + 1).inverse() * pa
 
 TEST(DepthDeadReckoning, KeepsTheVelocityWhereTheSurfacesFixNothing) {
   DepthDeadReckoning reckoning = makeReckoning();
-  reckoning.start(correlatedPriorAtTheLoss(towardsTheWall));
+  const MotionPrior prior = correlatedPriorAtTheLoss(towardsTheWall);
+  reckoning.start(prior);
   const std::vector<SurfaceAnchor> wall = keyframeAnchors(kWall, towardsTheWall(0));
   constexpr int kLost = 45;
   for (int k = 1; k <= kLost; ++k) reckoning.step(noisyFrameAt(kWall, k, towardsTheWall(k)), wall);
   EXPECT_GE(reckoning.framesHeld(), kLost - 2);
-  // Conditioned on the whole pose, with the fit's whole move taken, the depth noise spun
-  // the velocity up where the wall fixes little or nothing: 119 deg/s and 2.2 m/s off the
-  // truth after 1.5 s, the pose 0.82 m and 29.6 deg off. Measured now: 7.0 deg/s and
-  // 0.06 m/s, the pose 0.14 m and 1.3 deg off.
+  // The velocity at the loss, kept, is far off in turn rate (measured: 17.2 deg/s; 0.30
+  // m/s in speed): the test means something.
+  const Vec6 coasting_error = prior.velocity() - truthVelocity(towardsTheWall, kLost);
+  EXPECT_GT(coasting_error.tail<3>().norm() * 180.0 / M_PI, 15.0);
+  // Conditioned on the whole pose, with the fit's whole move taken, the depth noise drove
+  // the velocity where the wall fixes little or nothing: 19.6 deg/s and 0.78 m/s off the
+  // truth, the pose 0.96 m and 3.1 deg off (on a path without the stop and the reversed
+  // turn: 119 deg/s, 2.2 m/s and 29.6 deg). Measured now: 2.4 deg/s and 0.27 m/s, the pose
+  // 0.37 m and 1.1 deg off. The speed is no better than the loss's: the wall's normals,
+  // estimated from noisy depth, lend the slide along it a little information, and where
+  // that passes the bar the slide takes their noise (docs/open_work.md, session 39).
   const Vec6 error = reckoning.velocity() - truthVelocity(towardsTheWall, kLost);
-  EXPECT_LT(error.tail<3>().norm() * 180.0 / M_PI, 15.0);
+  EXPECT_LT(error.tail<3>().norm() * 180.0 / M_PI, 8.0);
   EXPECT_LT(error.head<3>().norm(), 0.5);
   const SE3 reckoned = *reckoning.poseAt(utimeOf(kLost), kCoastS);
   EXPECT_LT(degreesOff(reckoned, towardsTheWall(kLost)), 5.0);
-  EXPECT_LT(metresOff(reckoned, towardsTheWall(kLost)), 0.4);
+  EXPECT_LT(metresOff(reckoned, towardsTheWall(kLost)), 0.6);
 }
 
 }  // namespace

@@ -92,12 +92,14 @@ bool DepthDeadReckoning::step(const RgbdFrame& frame, const std::vector<SurfaceA
   if (kept == 0) return false;  // the surfaces fix nothing: the frame tells nothing
   const Vec6 moved = onto_kept * fitted;  // the surfaces' move, in the directions kept
   if (moved.dot(predicted->information * moved) > kChi2Dof6P999) return false;
-  // The move taken weighs the surfaces' honest information against the prediction's (the
-  // Kalman filter's mean). The fit itself weighs every sample as independent, and so takes
-  // the whole move even where the honest information is barely over the bar: there a few
-  // centimetres of depth noise through the samples' normals are the move, and divided by
-  // a frame's time they were a velocity of a metre a second (a lone wall in
-  // test_depth_dead_reckoning.cpp).
+  // The move taken weighs the surfaces' honest information against the prediction's, as
+  // the Kalman filter's mean would (the kept part of it, the other directions left free).
+  // The fit weighs every sample as independent, so the prediction in it counts for little
+  // and it takes nearly the whole move even where the honest information is barely over
+  // the bar: there a few centimetres of depth noise through the samples' normals are the
+  // move, and divided by a frame's time they were a velocity of a metre a second (a lone
+  // wall in test_depth_dead_reckoning.cpp). The prediction is thereby counted twice where
+  // the samples do not outweigh it: the move taken errs towards the prediction.
   const Vec6 off = onto_kept * (predicted->information + fixed).ldlt().solve(fixed * moved);
   const SE3 T_c_w = SE3::exp(off) * predicted->T_c_w;
   // The velocity changes only in the directions kept, as the pose does. Conditioned on the
@@ -105,15 +107,22 @@ bool DepthDeadReckoning::step(const RgbdFrame& frame, const std::vector<SurfaceA
   // through their covariance, and nothing there pulled it back: on the 10-minute flight,
   // with five directions kept, the turn about the camera's axis spun up to 350 deg/s
   // within a second, and the pose with it (docs/open_work.md, session 39). Elsewhere the
-  // velocity stays as it was.
+  // velocity stays as it was. The covariances are the update's, conditioned on the whole
+  // pose: in the other directions they shrink through the correlations while the mean
+  // stays, so the filter is somewhat overconfident there (an approximation, kept simple).
   const Vec6 v_before = prior_.velocity();
   MotionPrior updated = prior_;
   updated.update(frame.utime, T_c_w, fixed);
   const Vec6 v = v_before + onto_kept * (updated.velocity() - v_before);
-  // A velocity the vehicle cannot reach (MotionPriorOptions::max_speed_m_s, max_rate_rad_s:
-  // its top speed and rate) is a fit in another basin that the prediction's ellipsoid let
-  // through after frames not held had widened it.
-  if (v.head<3>().norm() > prior_.options().max_speed_m_s || v.tail<3>().norm() > prior_.options().max_rate_rad_s) {
+  // A speed or turn rate beyond the vehicle's (MotionPriorOptions::max_speed_m_s,
+  // max_rate_rad_s), and higher than before this frame, is a fit in another basin that
+  // the prediction's ellipsoid let through after frames not held had widened it. (Already
+  // beyond at the loss, a frame that slows it is still held.)
+  const auto beyond = [](const Vec3& now, const Vec3& before, double top) {
+    return now.norm() > top && now.norm() > before.norm();
+  };
+  if (beyond(v.head<3>(), v_before.head<3>(), prior_.options().max_speed_m_s) ||
+      beyond(v.tail<3>(), v_before.tail<3>(), prior_.options().max_rate_rad_s)) {
     return false;
   }
   updated.setVelocity(v);

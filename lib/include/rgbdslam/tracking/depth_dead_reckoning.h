@@ -20,13 +20,14 @@
 // The surfaces' honest information (PointToPlaneResiduals::honestInformation) weighs the
 // fit's move against the prediction, and updates the filter; its velocity follows by
 // conditioning, as while tracking. In the directions the surfaces do not fix, the
-// prediction and the velocity stay (see step()). A velocity beyond the vehicle's top speed
-// or rate (MotionPriorOptions::max_speed_m_s, max_rate_rad_s) is not held.
+// prediction and the velocity stay (see step()). A frame that would raise the speed or the
+// turn rate beyond the vehicle's (MotionPriorOptions::max_speed_m_s, max_rate_rad_s) is not
+// held.
 // A frame is held when enough samples agree (DepthAlignmentOptions::min_inliers,
 // min_inlier_ratio), the surfaces fix at least one direction, the fit's move in the
 // directions kept lies within the prediction's 99.9 % ellipsoid (chi-square, 6 degrees of
 // freedom: a fit further off settled in another basin of the surfaces), and the velocity
-// stays within the vehicle's reach. A frame
+// stays within the vehicle's reach (as above). A frame
 // not held leaves the filter as it was; none held for MotionPriorOptions::max_gap_s, or time
 // going back, ends the dead reckoning (the velocity is too old to follow by). The caller
 // coasts the last pose held on by the velocity, as it coasts from the last pose tracked.
