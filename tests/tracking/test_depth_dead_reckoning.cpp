@@ -180,7 +180,7 @@ TEST(DepthDeadReckoning, MovesWithTheWorld) {
 
 // A lone wall 3 m ahead: it fixes the distance to it and the camera's tilt against it, not
 // the slide along it nor the roll about its normal.
-const std::vector<Plane> kWall = {{Vec3(0, 0, 1), 3.0}};
+const std::vector<Plane> kLoneWall = {{Vec3(0, 0, 1), 3.0}};
 
 // Towards the wall at 0.3 m/s, turning at 0.15 rad/s about the vertical up to the loss at
 // k = 0; then, within 0.5 s, a stop and the turn reversed (-0.15 rad/s): the wall must
@@ -229,9 +229,9 @@ TEST(DepthDeadReckoning, KeepsTheVelocityWhereTheSurfacesFixNothing) {
   DepthDeadReckoning reckoning = makeReckoning();
   const MotionPrior prior = correlatedPriorAtTheLoss(towardsTheWall);
   reckoning.start(prior);
-  const std::vector<SurfaceAnchor> wall = keyframeAnchors(kWall, towardsTheWall(0));
+  const std::vector<SurfaceAnchor> wall = keyframeAnchors(kLoneWall, towardsTheWall(0));
   constexpr int kLost = 45;
-  for (int k = 1; k <= kLost; ++k) reckoning.step(noisyFrameAt(kWall, k, towardsTheWall(k)), wall);
+  for (int k = 1; k <= kLost; ++k) reckoning.step(noisyFrameAt(kLoneWall, k, towardsTheWall(k)), wall);
   EXPECT_GE(reckoning.framesHeld(), kLost - 2);
   // The velocity at the loss, kept, is far off in turn rate (measured: 17.2 deg/s; 0.30
   // m/s in speed): the test means something.
