@@ -43,6 +43,11 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "worked is tracked from its pose (false: relocalise on the tracking thread, each relocalised "
           "frame's pose as late as its relocalisation; the first pose of a run, in a loaded map too, is "
           "always found in line)");
+  r->bind(s, "follow_passed_frames", &follow_passed_frames, 0, 30, "frames",
+          "while relocalising off the frame path, keep the depth of at most this many of the frames passed "
+          "meanwhile (evenly spaced) for the tracker's dead reckoning (tracker.relocalise_dead_reckoning) to "
+          "follow before the next relocalisation; each holds a depth image, 0.6 MB at 640x480 (0: the dead "
+          "reckoning follows the frames relocalised only)");
   r->bind(s, "defer_cold_map_work", &defer_cold_map_work,
           "apply a map version's work on cold keyframes' points (and the keyframe store's holes for "
           "culled keyframes) in steps of 200 entries between frames, not in one block");

@@ -50,6 +50,10 @@ struct TrackerProcessOptions {
   // answered lost at once (tracker_node.h); false: on the tracking thread, each relocalised
   // frame's pose as late as its relocalisation.
   bool relocalise_off_frame_path = true;
+  // ...and of the frames passed meanwhile, at most this many (evenly spaced) are kept for the
+  // dead reckoning to follow before the next relocalisation (common/lost_frame_queue.h);
+  // each holds a depth image (0.6 MB at 640x480) [frames].
+  int follow_passed_frames = 3;
   // A map version's work on cold keyframes' points and the store's holes for culled
   // keyframes held back and done 200 entries a step between frames (MapReplica::apply
   // defer_cold): a join's cull or a snapshot in steps, not in one block (the 10-minute flight,

@@ -61,7 +61,8 @@ TrackerNode::TrackerNode(lcm::LCM* local, lcm::LCM* link, const PinholeCamera& c
     : local_(local), link_(link), options_(std::move(options)),
       tracker_(camera, tracker_options, mode, map_id), map_id_(map_id),
       sync_(map_id, options_.sync.outbox), budget_(options_.process.link_budget),
-      ladder_(encodingLadder(options_.process.bestEncoding(), options_.process.link_budget.min_jpeg_quality)) {
+      ladder_(encodingLadder(options_.process.bestEncoding(), options_.process.link_budget.min_jpeg_quality)),
+      passed_(options_.process.follow_passed_frames) {
   if (tracker_options.local_map.store_dir.empty()) return;  // all in memory
   Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(tracker_options.local_map.store_dir);
   if (!store) {
@@ -222,7 +223,10 @@ void TrackerNode::trackFrame(const Received& received) {
   bool relocalise = false;  // answered lost now, relocalised on the relocaliser thread
   if (relocalising()) {
     result = answerLost(frame, "passed: frame " + std::to_string(relocalising_frame_.seq) + " is being relocalised");
-    frames_while_relocalising_ += result.status == TrackResult::Status::kLost;  // not a bad frame
+    if (result.status == TrackResult::Status::kLost) {  // not a bad frame
+      ++frames_while_relocalising_;
+      if (!following_.load(std::memory_order_acquire)) passed_.offer(frame);
+    }
     pass = answered = true;
   } else if (options_.process.relocalise_off_frame_path && counters_.poses > 0 && tracker_.lost()) {
     // The first pose (a loaded map's too) is found in line. A bad frame returns below,
@@ -291,7 +295,17 @@ void TrackerNode::startRelocalisation() {
   std::swap(frame_, relocalising_frame_);
   frames_while_relocalising_ = 0;
   ++relocalisations_started_;
-  relocalisation_ = relocaliser_.submit([this] {
+  // The frames passed during the last relocalisation first (their depth, in time order),
+  // then this one.
+  const size_t follow = passed_.size();
+  frames_followed_ += static_cast<long>(follow);
+  if (follow > 0) following_.store(true, std::memory_order_release);
+  relocalisation_ = relocaliser_.submit([this, follow] {
+    if (follow > 0) {
+      for (size_t i = 0; i < follow; ++i) tracker_.followLost(passed_.frame(i));
+      passed_.clear();
+      following_.store(false, std::memory_order_release);
+    }
     relocalised_ = tracker_.trackPose(relocalising_frame_);
     relocalised_keyframe_ = tracker_.finishFrame();
   });
@@ -322,6 +336,7 @@ void TrackerNode::collectRelocalisation(bool wait) {
   }
   relocalised_ = TrackResult{};
   relocalised_keyframe_.reset();
+  if (!tracker_.lost()) passed_.clear();  // back on the map or a new part: nothing to follow
 }
 
 void TrackerNode::readTrackerFigures() {
@@ -577,6 +592,8 @@ void TrackerNode::printSummary() const {
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
   std::printf("lost_frames_reckoned %ld\n", tracker_.framesReckoned());  // the relocaliser has stopped
+  // Frames passed while relocalising handed to the dead reckoning (those it held are in the line above).
+  std::printf("passed_frames_followed %ld\n", frames_followed_);
   std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
     std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,

@@ -17,6 +17,9 @@
 //   thread takes the outcome; meanwhile this thread answers every frame lost at once (the
 //   one being relocalised first), holds map versions back (applied before the next
 //   relocalisation starts) and reads nothing of the tracker but its camera (frameError).
+//   The frames passed meanwhile are counted to the tracker afterwards, and the depth of up
+//   to follow_passed_frames of them is kept for the next relocalisation's job to follow by
+//   dead reckoning first (Tracker::followLost; common/lost_frame_queue.h).
 //   The first pose of a run (in a loaded map too) is always found in line. A relocalisation that worked publishes no pose of its own (its frame was
 //   answered already): the next frame is tracked from it. Why: a relocalisation takes
 //   6-12 tracked frames' time on a large map (the 10-minute flight: 17 ms median, 35 ms
@@ -50,6 +53,7 @@
 #include "common/link_budget.h"
 #include "rgbdslam/util/background_worker.h"
 #include "common/loss_report.h"
+#include "common/lost_frame_queue.h"
 #include "common/process_options.h"
 #include "common/samples.h"
 #include "common/store_spill.h"
@@ -201,6 +205,13 @@ class TrackerNode {
   TrackResult relocalised_;
   std::optional<KeyframeData> relocalised_keyframe_;  // finishFrame()'s, if any
   int frames_while_relocalising_ = 0;  // answered lost meanwhile
+  // Frames passed while relocalising, for the next job to follow by depth first
+  // (Tracker::followLost). Handed over by following_: this thread offers frames only while
+  // it is false; set when a job starts with frames to follow, cleared by the job once it
+  // has followed them.
+  LostFrameQueue passed_;
+  std::atomic<bool> following_{false};
+  long frames_followed_ = 0;  // handed to followLost, over the run
   long relocalisations_started_ = 0, relocalisations_recovered_ = 0;
   RecentSamples relocalise_ms_;  // the job's trackPose() [ms]
   PoseEstimate last_published_;  // its poses and part are what answerLost() publishes

@@ -526,6 +526,65 @@ TEST(Tracker, CountingPassedFramesIsPassingThem) {
   EXPECT_EQ(counting.frameError(roomFrame(158)), "");
 }
 
+// rgbd-tracker's relocaliser thread relocalises every 3rd lost frame or so; the frames it
+// passed meanwhile are handed over afterwards, for their depth to step the dead reckoning
+// (Tracker::followLost). Three trackers lose the room in the dark (black colour, depth
+// still read) at frame 152: one tracks every dark frame; one tracks every 3rd and follows
+// the two between (after countPassedFrames, as rgbd-tracker does); one tracks every 3rd
+// only. The first two hold the same frames and relocalise alike once the colour is back;
+// the third held fewer. Following a frame while tracking, or one without usable depth, does
+// nothing.
+TEST(Tracker, FollowingAPassedFrameIsTrackingItWhileLost) {
+  Tracker every(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Tracker following(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  Tracker third(room().camera(), TrackerOptions{}, SlamMode::kDepthBa, 1);
+  for (Tracker* t : {&every, &following, &third}) ASSERT_EQ(feed(t, 0, 151).status, Status::kTracked);
+  EXPECT_FALSE(following.followLost(roomFrame(152))) << "tracking: nothing to follow";
+  const auto dark = [](size_t i) {
+    RgbdFrame frame = roomFrame(i);
+    frame.colour.setTo(cv::Scalar::all(0));
+    return frame;
+  };
+  const size_t first = 152, end = 162;
+  int followed = 0;
+  for (size_t i = first; i < end; ++i) {
+    ASSERT_EQ(every.track(dark(i)).status, Status::kLost) << "frame " << i;
+    if ((i - first) % 3 == 0) {
+      ASSERT_EQ(following.track(dark(i)).status, Status::kLost) << "frame " << i;
+      ASSERT_EQ(third.track(dark(i)).status, Status::kLost) << "frame " << i;
+      continue;
+    }
+    if ((i - first) % 3 == 1) {
+      following.countPassedFrames(2);
+      third.countPassedFrames(2);
+    }
+    followed += following.followLost(dark(i));
+  }
+  EXPECT_EQ(following.framesReckoned(), every.framesReckoned());
+  EXPECT_GE(followed, 5) << "of 6 frames followed, held";
+  EXPECT_LT(third.framesReckoned(), every.framesReckoned()) << "its steps were three frames long";
+  // Depth the camera did not give: not followed.
+  RgbdFrame no_depth = dark(end), small = dark(end), unscaled = dark(end);
+  no_depth.depth = cv::Mat();
+  cv::resize(small.depth, small.depth, cv::Size(320, 240), 0, 0, cv::INTER_NEAREST);
+  unscaled.depth_scale = 0.0;
+  for (const RgbdFrame* bad : {&no_depth, &small, &unscaled}) EXPECT_FALSE(following.followLost(*bad));
+  EXPECT_EQ(following.framesReckoned(), every.framesReckoned());
+  // The colour back: both relocalise at the same frame, within a millimetre of each other
+  // (not exactly: the one tracking every frame tried 10 relocalisations, the other 4).
+  std::optional<size_t> back;
+  for (size_t i = end; i < end + 20 && !back; ++i) {
+    const TrackResult tracked = every.track(roomFrame(i));
+    const TrackResult followed_result = following.track(roomFrame(i));
+    ASSERT_EQ(followed_result.status, tracked.status) << "frame " << i;
+    if (tracked.status != Status::kRelocalised) continue;
+    back = i;
+    EXPECT_LT(positionError(tracked.pose.T_w_c, i), 0.02) << "frame " << i;
+    EXPECT_LT((followed_result.pose.T_w_c.translation() - tracked.pose.T_w_c.translation()).norm(), 1e-3);
+  }
+  ASSERT_TRUE(back) << "not relocalised within 20 frames of the colour's return";
+}
+
 // A vehicle cannot be where it could not have flown (tracker.relocalise_max_speed_m_s):
 // lost at frame 151, then shown frames 290-299 (1.27-1.39 m from the last pose) stamped
 // as if they came right after it, the tracker stays lost, since 3 m/s for a frame (33 ms)

@@ -219,6 +219,16 @@ class Tracker::Impl {
     if (lost() && frames > 0) lost_frames_ = static_cast<int>(std::min<int64_t>(INT_MAX, int64_t{lost_frames_} + frames));
   }
 
+  bool followLost(const RgbdFrame& frame) {
+    if (!lost() || frame.depth.cols != camera_.width || frame.depth.rows != camera_.height ||
+        frame.depth.type() != CV_16UC1 || !(frame.depth_scale > 0.0)) {
+      return false;
+    }
+    const long held = frames_reckoned_;
+    stepDeadReckoning(frame);
+    return frames_reckoned_ > held;
+  }
+
   bool lost() const { return state_ == TrackingState::kLost && replica_.map().numKeyframes() > 0; }
   std::string frameError(const RgbdFrame& frame) const;  // why the tracker cannot use it; empty: usable
 
@@ -1995,6 +2005,7 @@ TrackResult Tracker::trackPose(const RgbdFrame& frame) { return impl_->trackPose
 std::optional<KeyframeData> Tracker::finishFrame(bool real_time) { return impl_->finishFrame(real_time); }
 TrackResult Tracker::passLost(const RgbdFrame& frame) { return impl_->passLost(frame); }
 void Tracker::countPassedFrames(int frames) { impl_->countPassedFrames(frames); }
+bool Tracker::followLost(const RgbdFrame& frame) { return impl_->followLost(frame); }
 bool Tracker::lost() const { return impl_->lost(); }
 long Tracker::rejoins() const { return impl_->rejoins(); }
 long Tracker::rejoinTries() const { return impl_->rejoinTries(); }
