@@ -8,6 +8,7 @@ namespace rgbdslam {
 LostFrameQueue::LostFrameQueue(int capacity) : slots_(static_cast<size_t>(std::max(0, capacity))) {}
 
 void LostFrameQueue::offer(const RgbdFrame& frame) {
+  if (frame.depth.empty() || frame.depth.type() != CV_16UC1) return;  // nothing to follow
   const long index = offered_++;
   if (slots_.empty() || index % stride_ != 0) return;
   if (size_ == slots_.size()) {

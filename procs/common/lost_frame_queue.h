@@ -13,9 +13,11 @@
 //
 // At most 'capacity' frames, evenly spaced over those offered: every frame until full, then
 // every 2nd (every other one kept is dropped), every 4th, and so on; the longer the
-// relocalisation, the sparser. Only the depth, its scale and the time are kept, in buffers
-// reused from one relocalisation to the next (no allocation once each slot has held a
-// frame of the camera's size).
+// relocalisation, the sparser. The last frames offered may fall between the kept ones (6
+// offered to 3 slots keep the 1st and 5th): the frame relocalised next follows them within
+// a few frames anyway. Only the depth, its scale and the time are kept, in buffers reused
+// from one relocalisation to the next (no allocation once each slot has held a frame of the
+// camera's size); a frame without 16-bit depth is not offered at all.
 #include <cstddef>
 #include <vector>
 
@@ -26,14 +28,15 @@ namespace rgbdslam {
 class LostFrameQueue {
  public:
   explicit LostFrameQueue(int capacity);
-  // A frame passed: kept if it is its turn (a copy of its depth, depth_scale and utime).
+  // A frame passed: kept if it is its turn (a copy of its depth, depth_scale and utime);
+  // ignored without 16-bit depth.
   void offer(const RgbdFrame& frame);
   // The frames kept, oldest first: frame(0) .. frame(size() - 1).
   size_t size() const { return size_; }
   const RgbdFrame& frame(size_t i) const { return slots_[i]; }
   // Forgets the frames kept (the buffers stay); the next offered is kept.
   void clear();
-  // Frames offered since the last clear().
+  // Frames offered since the last clear() (those with 16-bit depth).
   long offered() const { return offered_; }
 
  private:

@@ -47,7 +47,7 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "while relocalising off the frame path, keep the depth of at most this many of the frames passed "
           "meanwhile (evenly spaced) for the tracker's dead reckoning (tracker.relocalise_dead_reckoning) to "
           "follow before the next relocalisation; each holds a depth image, 0.6 MB at 640x480 (0: the dead "
-          "reckoning follows the frames relocalised only)");
+          "reckoning follows the frames relocalised only; off by default, process_options.h says why)");
   r->bind(s, "defer_cold_map_work", &defer_cold_map_work,
           "apply a map version's work on cold keyframes' points (and the keyframe store's holes for "
           "culled keyframes) in steps of 200 entries between frames, not in one block");

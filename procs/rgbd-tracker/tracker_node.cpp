@@ -302,7 +302,9 @@ void TrackerNode::startRelocalisation() {
   if (follow > 0) following_.store(true, std::memory_order_release);
   relocalisation_ = relocaliser_.submit([this, follow] {
     if (follow > 0) {
+      const auto start = Clock::now();
       for (size_t i = 0; i < follow; ++i) tracker_.followLost(passed_.frame(i));
+      followed_ms_ = msBetween(start, Clock::now());
       passed_.clear();
       following_.store(false, std::memory_order_release);
     }
@@ -315,6 +317,10 @@ void TrackerNode::collectRelocalisation(bool wait) {
   if (!relocalising()) return;
   if (!wait && relocalisation_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
   const std::shared_future<void> done = std::exchange(relocalisation_, {});
+  done.wait();
+  // A job that threw while following left the flag set: its frames are not followed again.
+  if (following_.exchange(false, std::memory_order_acq_rel)) passed_.clear();
+  if (followed_ms_ >= 0.0) follow_ms_.add(std::exchange(followed_ms_, -1.0));
   done.get();  // the job's exception, if any, is this thread's now
   track_ms_.add(relocalised_.track_ms);
   relocalise_ms_.add(relocalised_.track_ms);
@@ -592,8 +598,11 @@ void TrackerNode::printSummary() const {
   std::printf("frames_inconsistent %ld\n", c.inconsistent);
   std::printf("frames_depth_aided %ld\n", c.depth_aided);
   std::printf("lost_frames_reckoned %ld\n", tracker_.framesReckoned());  // the relocaliser has stopped
-  // Frames passed while relocalising handed to the dead reckoning (those it held are in the line above).
-  std::printf("passed_frames_followed %ld\n", frames_followed_);
+  // Frames passed while relocalising handed to the dead reckoning (Tracker::followLost; those
+  // it held count in lost_frames_reckoned, with the frames relocalised it held), and the
+  // time each relocalisation's job took to follow them before relocalising.
+  std::printf("passed_frames_followed %ld\nfollow_ms_median %.3f\nfollow_ms_p99 %.3f\nfollow_ms_max %.3f\n",
+              frames_followed_, follow_ms_.quantile(0.5), follow_ms_.quantile(0.99), follow_ms_.quantile(1.0));
   std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
     std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,

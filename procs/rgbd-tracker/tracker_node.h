@@ -208,10 +208,13 @@ class TrackerNode {
   // Frames passed while relocalising, for the next job to follow by depth first
   // (Tracker::followLost). Handed over by following_: this thread offers frames only while
   // it is false; set when a job starts with frames to follow, cleared by the job once it
-  // has followed them.
+  // has followed them (frames that come meanwhile, the first few milliseconds of a
+  // relocalisation, are not kept: one set of buffers, not two).
   LostFrameQueue passed_;
   std::atomic<bool> following_{false};
   long frames_followed_ = 0;  // handed to followLost, over the run
+  double followed_ms_ = -1.0;  // the job's time following them; < 0: none (read after it ends)
+  RecentSamples follow_ms_;    // of the jobs that followed frames [ms]
   long relocalisations_started_ = 0, relocalisations_recovered_ = 0;
   RecentSamples relocalise_ms_;  // the job's trackPose() [ms]
   PoseEstimate last_published_;  // its poses and part are what answerLost() publishes

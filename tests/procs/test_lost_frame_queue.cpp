@@ -51,7 +51,7 @@ TEST(LostFrameQueue, KeepsAtMostItsCapacityEvenlySpaced) {
 }
 
 // Cleared, it starts over with every frame, in the buffers it had (no new allocation for
-// frames of the same size); capacity 0 keeps nothing.
+// frames of the same size); a frame without depth is ignored; capacity 0 keeps nothing.
 TEST(LostFrameQueue, StartsOverWhenClearedAndReusesItsBuffers) {
   LostFrameQueue queue(2);
   queue.offer(passedFrame(0));
@@ -68,6 +68,15 @@ TEST(LostFrameQueue, StartsOverWhenClearedAndReusesItsBuffers) {
   EXPECT_TRUE(queue.frame(0).depth.ptr<uint16_t>() == buffer || queue.frame(1).depth.ptr<uint16_t>() == buffer)
       << "a buffer of the first round is reused";
   EXPECT_EQ(queue.frame(1).depth.at<uint16_t>(0, 0), 12);
+
+  // A frame without 16-bit depth has nothing to follow: not offered, not counted.
+  RgbdFrame no_depth = passedFrame(12), float_depth = passedFrame(13);
+  no_depth.depth = cv::Mat();
+  float_depth.depth.convertTo(float_depth.depth, CV_32F);
+  queue.offer(no_depth);
+  queue.offer(float_depth);
+  EXPECT_EQ(queue.offered(), 2);
+  EXPECT_EQ(keptSeqs(queue), (std::vector<int64_t>{10, 11}));
 
   LostFrameQueue none(0);
   none.offer(passedFrame(0));

@@ -583,6 +583,14 @@ TEST(Tracker, FollowingAPassedFrameIsTrackingItWhileLost) {
     EXPECT_LT((followed_result.pose.T_w_c.translation() - tracked.pose.T_w_c.translation()).norm(), 1e-3);
   }
   ASSERT_TRUE(back) << "not relocalised within 20 frames of the colour's return";
+  // Back on the map (the dead reckoning of the loss still there): nothing to follow.
+  const long reckoned = following.framesReckoned();
+  EXPECT_FALSE(following.followLost(dark(*back + 1)));
+  EXPECT_EQ(following.framesReckoned(), reckoned);
+  // Lost again: a frame of the last loss, before the last pose, is not followed.
+  ASSERT_EQ(following.track(coveredFrame(*back + 1)).status, Status::kLost);
+  EXPECT_FALSE(following.followLost(dark(first + 1)));
+  EXPECT_EQ(following.framesReckoned(), reckoned);
 }
 
 // A vehicle cannot be where it could not have flown (tracker.relocalise_max_speed_m_s):

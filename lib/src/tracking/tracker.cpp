@@ -220,8 +220,10 @@ class Tracker::Impl {
   }
 
   bool followLost(const RgbdFrame& frame) {
-    if (!lost() || frame.depth.cols != camera_.width || frame.depth.rows != camera_.height ||
-        frame.depth.type() != CV_16UC1 || !(frame.depth_scale > 0.0)) {
+    // A frame from before the last pose (of an earlier loss) would end this loss's dead
+    // reckoning (time going back).
+    if (!lost() || (last_pose_utime_ && frame.utime <= *last_pose_utime_) || frame.depth.cols != camera_.width ||
+        frame.depth.rows != camera_.height || frame.depth.type() != CV_16UC1 || !(frame.depth_scale > 0.0)) {
       return false;
     }
     const long held = frames_reckoned_;

@@ -361,9 +361,10 @@ class Tracker {
   // A lost frame such a caller answered without the tracker, handed over later (before the
   // next frame it tracks, in time order): its depth alone steps the dead reckoning
   // (depth_dead_reckoning.h; TrackerOptions::relocalise_dead_reckoning), as a lost frame
-  // tracked would; nothing else. It needs 'depth' (the camera's size, 16-bit), 'depth_scale'
-  // and 'utime' only; a frame without them is ignored. Not counted (countPassedFrames
-  // counts it); no effect unless lost. True when the dead reckoning held the frame.
+  // tracked would; nothing else. It reads 'depth' (the camera's size, 16-bit), 'depth_scale'
+  // and 'utime' only; a frame without usable depth, or not after the last pose, is ignored.
+  // Not counted (countPassedFrames counts it); no effect unless lost. True when the dead
+  // reckoning held the frame.
   bool followLost(const RgbdFrame& frame);
   bool lost() const;  // relocalising: the next frame would be relocalised, not tracked
   // Times a camera in a part it started went back into another part (rejoin_every_frames).
