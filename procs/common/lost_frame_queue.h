@@ -9,7 +9,10 @@
 // at the median), and the dead reckoning's steps between the frames it saw were that much
 // longer. Emulated in batch on the 10-minute flight's first 4400 frames, following only
 // every 3rd lost frame started the three new parts 1.11, 0.63 and 1.14 m off, against
-// 0.50, 0.34 and 0.72 m following every frame (docs/open_work.md, session 39).
+// 0.50, 0.34 and 0.72 m following every frame (docs/open_work.md, session 39). Through
+// the suite, though, following the passed frames made the parts' headings worse after two
+// of the turns taken while lost: off by default (tracker_node.follow_passed_frames;
+// process_options.h).
 //
 // At most 'capacity' frames, evenly spaced over those offered: every frame until full, then
 // every 2nd (every other one kept is dropped), every 4th, and so on; the longer the

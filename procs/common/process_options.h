@@ -54,11 +54,12 @@ struct TrackerProcessOptions {
   // dead reckoning to follow before the next relocalisation (common/lost_frame_queue.h);
   // each holds a depth image (0.6 MB at 640x480) [frames]. Off by default: on the 10-minute
   // flight through the suite (one pair of runs on an idle machine, one beside a busy loop;
-  // README, "Session 40") following them (3) left the parts' headings further off at the
-  // turns taken while lost (11-40 deg against 7-11 deg without) and the whole run's ATE
-  // worse (1.80 / 5.76 m against 0.92 / 1.27 m): the dead reckoning's filter follows a turn
-  // worse the more frames it takes (docs/open_work.md, session 40). The batch runner, which
-  // follows every lost frame, shows the same (27.2 deg at the 90-degree turn).
+  // README, "Session 40") following them (3) left the parts' headings further off after
+  // two of the turns taken while lost (frames 1087 and 4235: 11-40 deg against 7-11 deg
+  // without; no worse after the turn at 2103) and the whole run's ATE worse (1.80 / 5.76 m
+  // against 0.92 / 1.27 m): the dead reckoning's filter seems to follow a turn worse the
+  // more frames it takes (docs/open_work.md, session 40). The batch runner, which follows
+  // every lost frame, started the part after the 90-degree turn 27.2 deg off too.
   int follow_passed_frames = 0;
   // A map version's work on cold keyframes' points and the store's holes for culled
   // keyframes held back and done 200 entries a step between frames (MapReplica::apply
