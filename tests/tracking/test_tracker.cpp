@@ -542,7 +542,8 @@ TEST(Tracker, FollowingAPassedFrameIsTrackingItWhileLost) {
   EXPECT_FALSE(following.followLost(roomFrame(152))) << "tracking: nothing to follow";
   const auto dark = [](size_t i) {
     RgbdFrame frame = roomFrame(i);
-    frame.colour.setTo(cv::Scalar::all(0));
+    // A new image: the scene's frames share their buffers with later calls and tests.
+    frame.colour = cv::Mat(frame.colour.size(), frame.colour.type(), cv::Scalar::all(0));
     return frame;
   };
   const size_t first = 152, end = 162;
