@@ -80,8 +80,8 @@ bool KeyframeStore::put(KeyframeId id, Kind kind, const std::vector<uint8_t>& by
 
 Expected<std::vector<uint8_t>> KeyframeStore::get(KeyframeId id, Kind kind) {
   const auto it = index_.find(key(id, kind));
-  const std::string what = "keyframe store: keyframe " + std::to_string(id) +
-                           (kind == Kind::kImage ? " image" : kind == Kind::kExtras ? " extras" : " message");
+  static const char* const kNames[kKinds] = {" image", " extras", " message", " points"};
+  const std::string what = "keyframe store: keyframe " + std::to_string(id) + kNames[static_cast<size_t>(kind)];
   if (it == index_.end()) return Error{what + ": not stored"};
   const Entry entry = it->second;
   std::vector<uint8_t> bytes(static_cast<size_t>(entry.size));
@@ -108,20 +108,24 @@ Expected<std::vector<uint8_t>> KeyframeStore::get(KeyframeId id, Kind kind) {
 }
 
 void KeyframeStore::remove(KeyframeId id) {
-  for (Kind kind : {Kind::kImage, Kind::kExtras, Kind::kMessage}) remove(id, kind);
+  for (size_t kind = 0; kind < kKinds; ++kind) remove(id, static_cast<Kind>(kind));
 }
 
 void KeyframeStore::removeLater(KeyframeId id) {
-  for (Kind kind : {Kind::kImage, Kind::kExtras, Kind::kMessage}) {
-    const auto it = index_.find(key(id, kind));
-    if (it == index_.end()) continue;
-    queued_.push_back(it->second);
-    live_bytes_ -= it->second.size;
-    --kind_entries_[static_cast<size_t>(kind)];
-    index_.erase(it);
-    full_ = false;
-  }
+  for (size_t kind = 0; kind < kKinds; ++kind) removeLater(id, static_cast<Kind>(kind));
 }
+
+void KeyframeStore::removeLater(KeyframeId id, Kind kind) {
+  const auto it = index_.find(key(id, kind));
+  if (it == index_.end()) return;
+  queued_.push_back(it->second);
+  live_bytes_ -= it->second.size;
+  --kind_entries_[static_cast<size_t>(kind)];
+  index_.erase(it);
+  full_ = false;
+}
+
+uint32_t KeyframeStore::checksum(const std::vector<uint8_t>& bytes) { return crcOf(bytes.data(), bytes.size()); }
 
 size_t KeyframeStore::releaseQueued(size_t max) {
   for (size_t done = 0; done < max && !queued_.empty(); ++done) {

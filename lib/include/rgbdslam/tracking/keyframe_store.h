@@ -33,8 +33,9 @@ namespace rgbdslam {
 class KeyframeStore {
  public:
   // kMessage: an unacknowledged keyframe's message on the link (rgbd-tracker's outbox,
-  // procs/common/store_spill.h), in a store of its own.
-  enum class Kind : uint8_t { kImage = 0, kExtras = 1, kMessage = 2 };
+  // procs/common/store_spill.h), in a store of its own. kPoints: the points a cold keyframe
+  // describes (map_replica.h).
+  enum class Kind : uint8_t { kImage = 0, kExtras = 1, kMessage = 2, kPoints = 3 };
 
   // An error names the directory and the system's reason (missing, not writable).
   static Expected<std::unique_ptr<KeyframeStore>> open(const std::string& directory);
@@ -57,6 +58,7 @@ class KeyframeStore {
   // entries are gone at once (has() is false); offsets only grow, so nothing is written
   // where a queued hole will be punched.
   void removeLater(KeyframeId id);
+  void removeLater(KeyframeId id, Kind kind);
   // Punches up to 'max' of the queued holes; returns how many are left.
   size_t releaseQueued(size_t max);
   size_t queued() const { return queued_.size(); }
@@ -69,6 +71,9 @@ class KeyframeStore {
   int64_t errors() const { return errors_; }     // failed writes and reads so far
   // On tmpfs or ramfs: the stored bytes are memory after all (the processes warn).
   bool inMemory() const { return in_memory_; }
+  // The CRC-32 each entry carries: a caller that read an entry can tell whether bytes it
+  // would put again are the same, and skip the write.
+  static uint32_t checksum(const std::vector<uint8_t>& bytes);
 
  private:
   struct Entry {
@@ -77,7 +82,7 @@ class KeyframeStore {
     uint32_t crc = 0;
   };
   explicit KeyframeStore(int fd) : fd_(fd) {}
-  static constexpr size_t kKinds = 3;
+  static constexpr size_t kKinds = 4;
   static uint64_t key(KeyframeId id, Kind kind) {
     return static_cast<uint64_t>(id) * kKinds + static_cast<uint8_t>(kind);  // ids are >= 0
   }
