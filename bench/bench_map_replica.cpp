@@ -11,8 +11,10 @@
 //   mapper's fallback).
 //   BM_ApplyBulkCull: 100 cold keyframes culled in one delta, half their points re-described
 //   by keyframes that stay (as after a join where two parts overlap).
-// Each whole (last argument 0), and as rgbd-tracker applies (1): the work on cold keyframes'
-// points held back, then done in steps between frames.
+// Each whole (second argument 0), and as rgbd-tracker applies (1): the work on cold
+// keyframes' points held back, then done in steps between frames; with the cold keyframes'
+// points in memory (third argument 0) or on the keyframe store (1: tracker.local_map_store_points,
+// the default since session 41).
 // Counters: median and worst time of the block of work done at once, worst step. Target:
 // both well under a frame period (33 ms), and flat in the map's size for a cull.
 // Run: taskset -c 0 build/bench/bench_map_replica
@@ -21,6 +23,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <string>
 
@@ -41,6 +44,7 @@ struct Built {
   std::unique_ptr<KeyframeStore> store;  // cold keyframes' images, as on the flight computer
   std::unique_ptr<MapReplica> replica;
   int keyframes = 0;
+  std::map<PointId, MapPointData> points;  // the map's points, as the mapper would have them
 };
 
 const cv::Mat& image(PinholeCamera* camera) {
@@ -56,30 +60,31 @@ const cv::Mat& image(PinholeCamera* camera) {
   return grey;
 }
 
-Built build(int keyframes) {
+Built build(int keyframes, bool points_on_storage) {
   PinholeCamera camera;
   const cv::Mat& grey = image(&camera);
-  Built b{nullptr, std::make_unique<MapReplica>(camera), keyframes};
+  Built b{nullptr, std::make_unique<MapReplica>(camera), keyframes, {}};
   if (auto store = KeyframeStore::open("/var/tmp")) {
     b.store = std::move(*store);
-    b.replica->setStore(b.store.get());
+    b.replica->setStore(b.store.get(), points_on_storage);
   }
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(40.0, 600.0), v(40.0, 440.0), depth(1.0, 4.0);
-  PointId next_point = 0;
   for (KeyframeId id = 0; id < keyframes; ++id) {
     KeyframeData data;
     data.id = id;
     data.T_w_c = SE3(Mat3::Identity(), Vec3(0.7 * static_cast<double>(id), 0, 0));
     data.grey = grey;
     b.replica->addKeyframe(makeKeyframe(data, KeyframeBuildOptions{}));
-    for (int i = 0; i < kPointsPerKeyframe; ++i, ++next_point) {
+    for (int i = 0; i < kPointsPerKeyframe; ++i) {
       const Eigen::Vector2d uv(u(rng), v(rng));
       const Vec3 p_c = camera.unproject(uv, depth(rng));
+      const PointId pid = provisionalPointId(id, i);
       NewPoint point;
-      point.point = MapPoint(MapPointData{next_point, data.T_w_c * p_c, id, uv, 0});
-      point.measurement = Measurement{next_point, uv, 0, p_c.z()};
+      point.point = MapPoint(MapPointData{pid, data.T_w_c * p_c, id, uv, 0});
+      point.measurement = Measurement{pid, uv, 0, p_c.z()};
       b.replica->addProvisionalPoint(point);
+      b.points[pid] = point.point.data();
     }
   }
   MapUpdate acked;
@@ -116,12 +121,14 @@ void timedApply(MapReplica* replica, const MapUpdate& update, bool defer, Times*
   }
 }
 
-void report(benchmark::State& state, const std::string& what, int keyframes, bool defer, const Times& times) {
+void report(benchmark::State& state, const std::string& what, int keyframes, bool defer, bool on_storage,
+            const Times& times) {
   state.counters["median_ms"] = times.at_once.quantile(0.5);
   state.counters["max_ms"] = times.at_once.quantile(1.0);
   state.counters["step_max_ms"] = times.steps.quantile(1.0);
-  std::printf("%s, %d keyframes (%d points, %d hot keyframes), %s: %zu applies, median %.2f ms, max %.2f ms", what.c_str(),
-              keyframes, keyframes * kPointsPerKeyframe, kHot, defer ? "cold work held back" : "whole",
+  std::printf("%s, %d keyframes (%d points, %d hot keyframes; cold points %s), %s: %zu applies, median %.2f ms, max %.2f ms",
+              what.c_str(), keyframes, keyframes * kPointsPerKeyframe, kHot, on_storage ? "on storage" : "in memory",
+              defer ? "cold work held back" : "whole",
               times.at_once.size(), times.at_once.quantile(0.5), times.at_once.quantile(1.0));
   if (defer) {
     std::printf("; then %.1f steps of %zu entries an apply, median %.3f ms, max %.3f ms", 
@@ -133,13 +140,12 @@ void report(benchmark::State& state, const std::string& what, int keyframes, boo
 
 void BM_ApplyCull(benchmark::State& state) {
   const int keyframes = static_cast<int>(state.range(0));
-  Built b = build(keyframes);
+  Built b = build(keyframes, state.range(2) != 0);
   Times times;
   const bool defer = state.range(1) != 0;
   int64_t version = 2;
   KeyframeId culled = 1;
   std::mt19937 rng(11);
-  std::uniform_int_distribution<PointId> any(0, static_cast<PointId>(keyframes) * kPointsPerKeyframe - 1);
   for (auto _ : state) {
     state.PauseTiming();
     MapUpdate delta;
@@ -148,53 +154,59 @@ void BM_ApplyCull(benchmark::State& state) {
     for (KeyframeId id = keyframes - kHot; id < keyframes; ++id) {
       delta.keyframes.push_back({id, b.replica->map().keyframe(id)->T_w_c, 0});
     }
+    std::vector<PointId> ids;
+    for (const auto& [id, point] : b.points) ids.push_back(id);
+    std::uniform_int_distribution<size_t> any(0, ids.size() - 1);
     while (delta.moved_points.size() < 2000) {
-      const MapPoint* point = b.replica->map().point(any(rng));
-      if (point) delta.moved_points.push_back(PointPosition{point->id, point->p_w + Vec3(0.001, 0, 0)});
+      MapPointData& point = b.points[ids[any(rng)]];
+      point.p_w += Vec3(0.001, 0, 0);
+      delta.moved_points.push_back(PointPosition{point.id, point.p_w});
     }
-    delta.removed_keyframes = {culled++};
+    delta.removed_keyframes = {culled};
+    b.points.erase(b.points.lower_bound(provisionalPointId(culled, 0)), b.points.lower_bound(provisionalPointId(culled + 1, 0)));
+    ++culled;
     state.ResumeTiming();
     timedApply(b.replica.get(), delta, defer, &times);
   }
-  report(state, "a delta culling one keyframe, 2000 points moved", keyframes, defer, times);
+  report(state, "a delta culling one keyframe, 2000 points moved", keyframes, defer, state.range(2) != 0, times);
 }
 
-// Every keyframe and point of the replica nudged 1 mm along y: as moves in a delta (a loop
-// closure or a join), or in full in a snapshot.
-MapUpdate everything(const MapReplica& replica, int64_t version, bool snapshot) {
+// Every keyframe and point of the map nudged 1 mm along y: as moves in a delta (a loop
+// closure or a join), or in full in a snapshot (in id order, as the mapper sends it).
+MapUpdate everything(Built* b, int64_t version, bool snapshot) {
   MapUpdate update;
   update.version = version;
   update.is_snapshot = snapshot;
-  update.acked_below = replica.map().keyframes().rbegin()->first + 1;
+  update.acked_below = b->replica->map().keyframes().rbegin()->first + 1;
   const Vec3 nudge(0, 0.001, 0);
-  for (const auto& [id, keyframe] : replica.map().keyframes()) {
+  for (const auto& [id, keyframe] : b->replica->map().keyframes()) {
     update.keyframes.push_back({id, SE3(Mat3::Identity(), nudge) * keyframe->T_w_c, 0});
   }
-  for (const auto& [id, point] : replica.map().points()) {
-    if (!snapshot) {
-      update.moved_points.push_back(PointPosition{id, point.p_w + nudge});
-      continue;
+  for (auto& [id, point] : b->points) {
+    point.p_w += nudge;
+    if (snapshot) {
+      update.points.push_back(point);
+    } else {
+      update.moved_points.push_back(PointPosition{id, point.p_w});
     }
-    MapPointData data = point.data();
-    data.p_w += nudge;
-    update.points.push_back(data);
   }
   return update;
 }
 
 void applyEverything(benchmark::State& state, bool snapshot) {
   const int keyframes = static_cast<int>(state.range(0));
-  Built b = build(keyframes);
+  Built b = build(keyframes, state.range(2) != 0);
   Times times;
   const bool defer = state.range(1) != 0;
   int64_t version = 2;
   for (auto _ : state) {
     state.PauseTiming();
-    const MapUpdate update = everything(*b.replica, version++, snapshot);
+    const MapUpdate update = everything(&b, version++, snapshot);
     state.ResumeTiming();
     timedApply(b.replica.get(), update, defer, &times);
   }
-  report(state, snapshot ? "a snapshot" : "a delta moving every keyframe and point", keyframes, defer, times);
+  report(state, snapshot ? "a snapshot" : "a delta moving every keyframe and point", keyframes, defer, state.range(2) != 0,
+         times);
 }
 
 void BM_ApplyMoveAll(benchmark::State& state) { applyEverything(state, false); }
@@ -210,7 +222,7 @@ void BM_ApplyBulkCull(benchmark::State& state) {
   const bool defer = state.range(2) != 0;
   for (auto _ : state) {
     state.PauseTiming();
-    Built b = build(keyframes);
+    Built b = build(keyframes, state.range(3) != 0);
     MapUpdate delta;
     delta.version = 2;
     delta.acked_below = keyframes;
@@ -218,12 +230,11 @@ void BM_ApplyBulkCull(benchmark::State& state) {
       delta.removed_keyframes.push_back(id);
       const KeyframeId keeper = culled + 1 + id % (keyframes - culled - 1);
       bool keep = true;
-      for (PointId pid : b.replica->describedBy(id)) {
-        const MapPoint& point = *b.replica->map().point(pid);
+      for (auto it = b.points.lower_bound(provisionalPointId(id, 0)); it != b.points.lower_bound(provisionalPointId(id + 1, 0)); ++it) {
         if (keep) {
-          delta.points.push_back(MapPointData{pid, point.p_w, keeper, point.source_uv, 0});
+          delta.points.push_back(MapPointData{it->first, it->second.p_w, keeper, it->second.uv, 0});
         } else {
-          delta.removed_points.push_back(pid);
+          delta.removed_points.push_back(it->first);
         }
         keep = !keep;
       }
@@ -234,13 +245,13 @@ void BM_ApplyBulkCull(benchmark::State& state) {
     b = Built{};
     state.ResumeTiming();
   }
-  report(state, "a delta culling " + std::to_string(culled) + " keyframes", keyframes, defer, times);
+  report(state, "a delta culling " + std::to_string(culled) + " keyframes", keyframes, defer, state.range(3) != 0, times);
 }
 
 }  // namespace
 
-BENCHMARK(BM_ApplyCull)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(60);
-BENCHMARK(BM_ApplyMoveAll)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
-BENCHMARK(BM_ApplySnapshot)->ArgsProduct({{120, 300}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
-BENCHMARK(BM_ApplyBulkCull)->Args({300, 100, 0})->Args({300, 100, 1})->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_ApplyCull)->ArgsProduct({{120, 300}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(60);
+BENCHMARK(BM_ApplyMoveAll)->ArgsProduct({{120, 300}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
+BENCHMARK(BM_ApplySnapshot)->ArgsProduct({{120, 300}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(10);
+BENCHMARK(BM_ApplyBulkCull)->ArgsProduct({{300}, {100}, {0, 1}, {0, 1}})->Unit(benchmark::kMillisecond)->Iterations(3);
 BENCHMARK_MAIN();

@@ -313,6 +313,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
               stats.keyframe_sends, stats.maps_applied, stats.maps_missing_delta, stats.maps_stale,
               stats.snapshots, stats.link_lost);
   std::printf("lost_episodes %ld\nrelocalisations %ld\n", loss_.episodes(), loss_.relocalisations());
+  std::printf("tracker_points %zu\ntracker_points_on_storage %zu\n", slam_->tracker().numPoints(),
+              slam_->tracker().pointsOnStorage());
   if (options_.keyframe_rung >= 0) {
     std::printf("keyframe_rung %d\nkeyframe_wire_kb_mean %.1f\nkeyframe_wire_errors %ld\n", options_.keyframe_rung,
                 wire_keyframes_ > 0 ? static_cast<double>(wire_bytes_) / wire_keyframes_ / 1000.0 : 0.0, wire_errors_);

@@ -162,6 +162,8 @@ void TrackerNode::handleAvailable(int timeout_ms) {
          (backlog_.empty() || msBetween(pending_maps_.front().received, now) >= kMaxMapWaitMs)) {
     applyOldestMap();
   }
+  // Freezing and thawing leave work too (the keyframe store's holes), map versions or not.
+  if (!deferred_map_work_ && !relocalising()) deferred_map_work_ = tracker_.hasDeferredMapWork();
   if (deferred_map_work_ && backlog_.empty() && pending_maps_.empty() && !relocalising()) {
     const auto start = Clock::now();
     deferred_map_work_ = tracker_.applyDeferredMap(kDeferredMapEntries);
@@ -347,7 +349,8 @@ void TrackerNode::collectRelocalisation(bool wait) {
 
 void TrackerNode::readTrackerFigures() {
   const KeyframeStore* store = tracker_.keyframeStore();
-  tracker_figures_ = TrackerFigures{static_cast<int64_t>(tracker_.map().numPoints()),
+  tracker_figures_ = TrackerFigures{static_cast<int64_t>(tracker_.numPoints()),
+                                    static_cast<int64_t>(tracker_.pointsOnStorage()),
                                     hotKeyframes(tracker_.map()),
                                     store ? static_cast<int64_t>(store->entries()) : 0,
                                     store ? store->bytes() / 1024 : 0,
@@ -524,6 +527,7 @@ void TrackerNode::publishStatus() {
                      {"keyframes_over_budget", c.keyframes_over_budget},
                      {"keyframe_rung", c.last_rung},
                      {"points", t.points},
+                     {"points_on_storage", t.points_on_storage},
                      {"keyframes_hot", t.keyframes_hot},
                      {"keyframe_store_entries", t.store_entries},
                      {"keyframe_store_kb", t.store_kb},
@@ -605,8 +609,9 @@ void TrackerNode::printSummary() const {
               frames_followed_, follow_ms_.quantile(0.5), follow_ms_.quantile(0.99), follow_ms_.quantile(1.0));
   std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
-    std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,
-                static_cast<long>(store->errors()));
+    std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\npoints %zu\npoints_on_storage %zu\n",
+                store->bytes() / 1048576.0, static_cast<long>(store->errors()), tracker_.numPoints(),
+                tracker_.pointsOnStorage());
   }
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -44,11 +45,20 @@ class LocalMap : public ::testing::Test {
     return update;
   }
   // Map version 1 acknowledges the three keyframes (the mapper may cull them now).
-  void acknowledgeAll() {
+  void acknowledgeAll() { acknowledgeAll(replica.get()); }
+  static void acknowledgeAll(MapReplica* r) {
     MapUpdate acked;
     acked.version = 1;
     acked.acked_below = 3;
-    ASSERT_TRUE(replica->apply(acked));
+    ASSERT_TRUE(r->apply(acked));
+  }
+  // A second replica built as 'replica' is.
+  std::unique_ptr<MapReplica> anotherReplica() {
+    auto other = std::make_unique<MapReplica>(camera);
+    std::swap(other, replica);
+    SetUp();
+    std::swap(other, replica);
+    return other;
   }
 
   PinholeCamera camera;
@@ -312,10 +322,7 @@ TEST_F(LocalMap, TheIndexOfEachKeyframesPointsFollowsTheMap) {
 // search uses goes in at once, and once done it leaves the replica as a whole apply would:
 // a delta (re-described, moved and removed points, a culled keyframe) and then a snapshot.
 TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
-  auto whole = std::make_unique<MapReplica>(camera);
-  std::swap(whole, replica);
-  SetUp();  // 'replica' a second one, built the same way
-  std::swap(whole, replica);
+  auto whole = anotherReplica();
   for (MapReplica* r : {replica.get(), whole.get()}) {
     for (PointId id = 0; id < 30; ++id) {
       r->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(0.1 * id, -0.5, 1.0 + 0.1 * id), id % 3,
@@ -323,10 +330,7 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
                                       Measurement{id, {300, 200}, 0, 1.0}});
     }
     r->updateLocalMap({0}, 2, 10, 90);  // keyframes 1 and 2 cold
-    MapUpdate acked;
-    acked.version = 1;
-    acked.acked_below = 3;
-    ASSERT_TRUE(r->apply(acked));
+    acknowledgeAll(r);
   }
   ASSERT_TRUE(keyframe(1).cold() && keyframe(2).cold() && !keyframe(0).cold());
   MapUpdate delta;
@@ -405,6 +409,142 @@ TEST_F(LocalMap, WorkOnColdKeyframesWaitsAndEndsAsAWholeApply) {
   ASSERT_TRUE(whole->apply(next));
   EXPECT_FALSE(replica->hasDeferred());
   same("the snapshot");
+}
+
+// With a store, a cold keyframe's points live on storage (LocalMapOptions::store_points):
+// whatever a map version does to them, held back or at once, the map read back is the one a
+// replica holding every point in memory has, to the last statistic and depth record, and
+// while cold the memory holds none of them.
+TEST_F(LocalMap, PointsOnStorageGiveTheSameMapAsPointsInMemory) {
+  Expected<std::unique_ptr<KeyframeStore>> store = KeyframeStore::open(::testing::TempDir());
+  Expected<std::unique_ptr<KeyframeStore>> direct_store = KeyframeStore::open(::testing::TempDir());
+  ASSERT_TRUE(store && direct_store);
+  auto memory = anotherReplica();
+  auto direct = anotherReplica();  // on storage too, every version applied at once
+  replica->setStore(store->get());
+  direct->setStore(direct_store->get());
+  const std::vector<MapReplica*> on_store = {replica.get(), direct.get()};
+  for (MapReplica* r : {replica.get(), direct.get(), memory.get()}) {
+    for (KeyframeId kf = 0; kf < 3; ++kf) {
+      for (int64_t i = 0; i < 6; ++i) {
+        const PointId id = provisionalPointId(kf, i);
+        r->addProvisionalPoint(NewPoint{MapPoint(MapPointData{id, Vec3(kf + 0.1 * i, -0.5, 1.0 + 0.1 * i), kf,
+                                                              {300.0 + i, 200}, static_cast<int>(i % 2)}),
+                                        Measurement{id, {300.0 + i, 200}, 0, 1.0}});
+      }
+    }
+    for (PointSlot& slot : r->slots()) {  // statistics as searches leave them
+      slot.point->times_projected = static_cast<int>(slot.point->id % 7) + 3;
+      slot.point->times_found = static_cast<int>(slot.point->id % 5);
+      slot.point->depth_record.add(DepthVerdict::kAgrees, 1.5);
+      slot.point->depth_record.add(DepthVerdict::kSeenThrough, 2.0 + 0.01 * static_cast<double>(slot.point->id % 11));
+      slot.point->depth_record.add(DepthVerdict::kMissing, 2.5);
+    }
+    r->updateLocalMap({0}, 2, 10, 90);  // keyframes 1 and 2 cold
+    acknowledgeAll(r);
+  }
+  ASSERT_TRUE(keyframe(1).cold() && keyframe(2).cold() && !keyframe(0).cold());
+  const auto positions = [](const MapReplica& r, KeyframeId id) {
+    std::vector<std::array<double, 3>> out;
+    r.forEachPosition(id, [&](const Vec3& p) { out.push_back({p.x(), p.y(), p.z()}); });
+    std::sort(out.begin(), out.end());
+    return out;
+  };
+  const auto apply = [&](const MapUpdate& update, const char* when) {
+    const bool known = memory->apply(update);
+    ASSERT_EQ(replica->apply(update, /*defer_cold=*/true), known) << when;
+    ASSERT_EQ(direct->apply(update), known) << when;
+    for (int steps = 0; replica->applyDeferred(3) > 0;) ASSERT_LT(++steps, 100) << when;
+    for (MapReplica* r : on_store) {
+      EXPECT_EQ(r->numPoints(), memory->map().numPoints()) << when;
+      for (const auto& [id, kf] : r->map().keyframes()) {
+        if (!kf->cold()) continue;
+        EXPECT_TRUE(r->describedBy(id).empty()) << when << ": keyframe " << id << "'s points are on storage";
+        EXPECT_EQ(positions(*r, id), positions(*memory, id)) << when << ", keyframe " << id;
+      }
+    }
+  };
+  EXPECT_EQ(replica->storedPoints(), 14u) << "six each and the fixture's one";
+  EXPECT_EQ(replica->map().numPoints(), 7u);
+  EXPECT_EQ((*store)->entries(KeyframeStore::Kind::kPoints), 2u);
+
+  MapUpdate delta;
+  delta.version = 2;
+  delta.points.push_back(MapPointData{provisionalPointId(1, 0), Vec3(3, 1, 4), 2, {250, 240}, 1});  // 1 -> 2
+  delta.points.push_back(MapPointData{provisionalPointId(1, 1), Vec3(1, 1, 4), 0, {250, 240}, 0});  // 1 -> 0, hot
+  delta.points.push_back(MapPointData{mapperPointId(2, 0), Vec3(2, 2, 4), 2, {270, 240}, 0});       // new, cold
+  delta.moved_points = {{provisionalPointId(2, 2), Vec3(2.2, 0.1, 2)}, {provisionalPointId(0, 2), Vec3(0.2, 0.1, 2)}};
+  delta.removed_points = {provisionalPointId(2, 3), provisionalPointId(0, 3)};
+  delta.removed_keyframes = {1};
+  apply(delta, "the delta");
+  EXPECT_EQ((*store)->entries(KeyframeStore::Kind::kPoints), 1u) << "keyframe 1's went with it";
+
+  MapUpdate moves;  // only points on storage: moved and removed in memory's lists, no read
+  moves.version = 3;
+  moves.moved_points = {{provisionalPointId(2, 5), Vec3(2.5, 0.3, 2)}, {provisionalPointId(2, 0), Vec3(2, 0.3, 2)}};
+  moves.removed_points = {provisionalPointId(2, 2)};
+  apply(moves, "the moves");
+  MapUpdate taken;  // a point taken from a keyframe on storage to a hot one
+  taken.version = 4;
+  taken.points.push_back(MapPointData{provisionalPointId(2, 1), Vec3(2, 1, 4), 0, {260, 240}, 0});
+  apply(taken, "the point taken");
+  EXPECT_EQ(replica->map().point(provisionalPointId(2, 1))->depth_record.checks, 2) << "with its depth record";
+
+  MapUpdate snapshot;  // every point moved but two of keyframe 2 (culled)
+  snapshot.version = 5;
+  snapshot.is_snapshot = true;
+  snapshot.acked_below = 3;
+  for (const auto& [id, kf] : memory->map().keyframes()) snapshot.keyframes.push_back({id, kf->T_w_c, 0});
+  for (const auto& [id, point] : memory->map().points()) {
+    if (id == provisionalPointId(2, 4) || id == mapperPointId(2, 0)) continue;
+    MapPointData data = point.data();
+    data.p_w.z() += 0.25;
+    snapshot.points.push_back(data);
+  }
+  apply(snapshot, "the snapshot");
+
+  for (MapReplica* r : {replica.get(), direct.get(), memory.get()}) r->updateLocalMap({0, 2}, 2, 10, 90);  // thawed
+  EXPECT_EQ(replica->storedPoints(), 0u);
+  EXPECT_EQ((*store)->entries(KeyframeStore::Kind::kPoints), 1u) << "kept until it is frozen again";
+  replica->updateLocalMap({0}, 2, 10, 90, 1);  // frozen again: written without the points removed meanwhile
+  replica->updateLocalMap({0, 2}, 2, 10, 90);
+  const size_t holes = (*store)->queued();
+  replica->updateLocalMap({0}, 2, 10, 90, 1);  // and again, unsearched
+  EXPECT_EQ((*store)->queued(), holes) << "the same bytes are not written again";
+  EXPECT_GT(replica->storedPoints(), 0u);
+  replica->updateLocalMap({0, 2}, 2, 10, 90);
+  for (MapReplica* r : on_store) {
+    ASSERT_EQ(r->map().numPoints(), memory->map().numPoints());
+    for (const auto& [id, point] : memory->map().points()) {
+      const MapPoint* mine = r->map().point(id);
+      ASSERT_NE(mine, nullptr) << "point " << id;
+      EXPECT_EQ(mine->p_w, point.p_w) << "point " << id;
+      EXPECT_EQ(mine->source_keyframe, point.source_keyframe) << "point " << id;
+      EXPECT_EQ(mine->source_level, point.source_level) << "point " << id;
+      EXPECT_EQ(mine->source_uv, point.source_uv) << "point " << id;
+      EXPECT_EQ(mine->times_projected, point.times_projected) << "point " << id;
+      EXPECT_EQ(mine->times_found, point.times_found) << "point " << id;
+      EXPECT_EQ(mine->depth_record.checks, point.depth_record.checks) << "point " << id;
+      EXPECT_EQ(mine->depth_record.seen_through, point.depth_record.seen_through) << "point " << id;
+      EXPECT_EQ(mine->depth_record.missing, point.depth_record.missing) << "point " << id;
+      EXPECT_EQ(mine->depth_record.read_max_m, point.depth_record.read_max_m) << "point " << id;
+    }
+    for (const auto& [id, kf] : memory->map().keyframes()) {
+      std::vector<PointId> a = r->describedBy(id), b = memory->describedBy(id);
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      EXPECT_EQ(a, b) << "keyframe " << id;
+    }
+    std::vector<PointId> a, b;
+    for (const PointSlot& slot : r->slots()) a.push_back(slot.point->id);
+    for (const PointSlot& slot : memory->slots()) b.push_back(slot.point->id);
+    EXPECT_EQ(a, b) << "the search order";
+    EXPECT_EQ(r->pointsLost(), 0);
+  }
+  EXPECT_EQ((*store)->errors() + (*direct_store)->errors(), 0);
+  replica->setStore(nullptr);  // the stores go before the fixture's replicas
+  direct->setStore(nullptr);
+  direct.reset();
 }
 
 // Freezing or culling a keyframe removes its points' slots in slot order, as a scan of the

@@ -880,6 +880,31 @@ TEST(Tracker, TrackPoseThenFinishFrameIsTrack) {
   EXPECT_EQ(coldKeyframes(whole.map()), coldKeyframes(split.map()));
 }
 
+// Cold keyframes' points on the keyframe store (local_map.store_points) track as those kept
+// in memory: the same pose every frame, while the memory holds only the hot keyframes' points.
+TEST(Tracker, ColdPointsOnStorageTrackAsInMemory) {
+  TrackerOptions on_storage = smallLocalMap();
+  on_storage.local_map.store_dir = ::testing::TempDir();
+  Tracker memory(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
+  Tracker stored(room().camera(), on_storage, SlamMode::kDepthBa, 1);
+  ASSERT_NE(stored.keyframeStore(), nullptr);
+  size_t most_on_storage = 0;
+  for (size_t i = 0; i < 150; ++i) {
+    const TrackResult a = memory.track(roomFrame(i));
+    const TrackResult b = stored.track(roomFrame(i));
+    ASSERT_EQ(a.status, b.status) << "frame " << i;
+    EXPECT_TRUE(samePose(a.pose.T_w_c, b.pose.T_w_c)) << "frame " << i;
+    ASSERT_EQ(memory.numPoints(), stored.numPoints()) << "frame " << i;
+    EXPECT_EQ(stored.map().numPoints() + stored.pointsOnStorage(), stored.numPoints()) << "frame " << i;
+    most_on_storage = std::max(most_on_storage, stored.pointsOnStorage());
+  }
+  EXPECT_EQ(memory.pointsOnStorage(), 0u) << "no store";
+  EXPECT_GT(coldKeyframes(stored.map()), 0u);
+  EXPECT_GT(most_on_storage, 500u);
+  EXPECT_LT(stored.map().numPoints(), memory.map().numPoints());
+  EXPECT_EQ(stored.keyframeStore()->errors(), 0);
+}
+
 TEST(Tracker, AKeyframeNotFinishedComesWithTheNextFrame) {
   Tracker whole(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);
   Tracker split(room().camera(), smallLocalMap(), SlamMode::kDepthBa, 1);

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <map>
+#include <optional>
 #include <utility>
 
 #include "rgbdslam/image/codec.h"
@@ -19,6 +21,49 @@ constexpr double kBoundsSlackM = 1e-6;
 // 200 took up to 24 ms on the 10-minute flight, where the mapper culls 35-126 keyframes at
 // once after a join.
 constexpr size_t kStoreReleaseEntries = 100;
+// Keyframes read back from the store for work held back (applyDeferred) that stay in memory
+// between its steps while work is left: the work goes keyframe by keyframe, and a keyframe
+// put back after each step of 200 entries and read again for the next would cost a write
+// and a read a step.
+constexpr size_t kLoadedKeptForDeferred = 4;
+
+// A point on storage (KeyframeStore::Kind::kPoints): what the tracker learnt of it, its
+// statistics and depth record. What the map says of it (position, patch) stays in memory
+// (MapReplica::StoredPoints), so that an update moving it or sending it again needs neither
+// a read nor a write. Read back by the process that wrote it (the store's file goes with
+// the process), so the layout is this build's.
+struct StoredPoint {
+  int64_t id;
+  int32_t times_projected, times_found;
+  int32_t checks, seen_through, missing;
+  float read_max_m;
+};
+static_assert(sizeof(MapPoint) == 96, "a field added to MapPoint must be kept on storage too (StoredPoint)");
+constexpr char kPointsMagic[4] = {'R', 'P', 'T', '2'};
+
+std::vector<uint8_t> encodePoints(const Map& map, const std::vector<PointId>& ids) {
+  std::vector<uint8_t> out(sizeof(kPointsMagic) + ids.size() * sizeof(StoredPoint));
+  std::memcpy(out.data(), kPointsMagic, sizeof(kPointsMagic));
+  uint8_t* at = out.data() + sizeof(kPointsMagic);
+  for (PointId id : ids) {
+    const MapPoint& p = *map.point(id);
+    const DepthRecord& r = p.depth_record;
+    const StoredPoint s{p.id, p.times_projected, p.times_found, r.checks, r.seen_through, r.missing, r.read_max_m};
+    std::memcpy(at, &s, sizeof(s));
+    at += sizeof(s);
+  }
+  return out;
+}
+
+std::optional<std::vector<StoredPoint>> decodePoints(const std::vector<uint8_t>& bytes) {
+  if (bytes.size() < sizeof(kPointsMagic) || std::memcmp(bytes.data(), kPointsMagic, sizeof(kPointsMagic)) != 0 ||
+      (bytes.size() - sizeof(kPointsMagic)) % sizeof(StoredPoint) != 0) {
+    return std::nullopt;
+  }
+  std::vector<StoredPoint> points((bytes.size() - sizeof(kPointsMagic)) / sizeof(StoredPoint));
+  if (!points.empty()) std::memcpy(points.data(), bytes.data() + sizeof(kPointsMagic), points.size() * sizeof(StoredPoint));
+  return points;
+}
 }  // namespace
 
 void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
@@ -36,6 +81,9 @@ void LocalMapOptions::bind(OptionRegistry* r, const std::string& s) {
               "directory on the flight computer's storage (not a RAM file system) where the images and "
               "extras of keyframes outside the local map are kept, in an unnamed file the system removes "
               "at exit; empty: they stay in memory");
+  r->bind(s, "local_map_store_points", &store_points,
+          "the points of keyframes outside the local map go to the store too (with local_map_store_dir), "
+          "read back when the camera comes back or a map update changes their patch; memory keeps 49 bytes a point");
 }
 
 LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted, int max_thaws,
@@ -53,7 +101,10 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
     }
   }
   addSlotsOf(thawed);
-  if (max_freezes <= 0) return change;
+  if (max_freezes <= 0) {
+    storeLoaded();
+    return change;
+  }
   // At least as many frozen as thawed: a lost tracker thaws around every relocalisation
   // candidate (8 each, several candidates a frame), and with only max_freezes going back the
   // hot set grew to 117 of a window of 40 on the flight (+35 MB of pyramids).
@@ -61,13 +112,15 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
   // leaves the wanted list for a frame or two and comes back is not frozen and thawed again
   // (each thaw rebuilds its pyramid from the JPEG, so its points' patches lose a little).
   const int freezes = std::min(max_freezes + change.thawed, hotKeyframes() - max_hot);
-  if (freezes <= 0) return change;
-  const std::unordered_set<KeyframeId> keep(wanted.begin(), wanted.end());
-  for (const auto& [id, keyframe] : map_.keyframes()) {  // oldest first
-    if (keyframe->cold() || keep.count(id)) continue;
-    freeze(keyframe.get(), jpeg_quality);
-    if (++change.frozen >= freezes) break;
+  if (freezes > 0) {
+    const std::unordered_set<KeyframeId> keep(wanted.begin(), wanted.end());
+    for (const auto& [id, keyframe] : map_.keyframes()) {  // oldest first
+      if (keyframe->cold() || keep.count(id)) continue;
+      freeze(keyframe.get(), jpeg_quality);
+      if (++change.frozen >= freezes) break;
+    }
   }
+  storeLoaded();
   return change;
 }
 
@@ -96,6 +149,7 @@ void MapReplica::freeze(Keyframe* keyframe, int jpeg_quality) {
   }
   std::sort(described.begin(), described.end());
   for (const auto& [index, id] : described) removeSlot(id);
+  storePoints(keyframe->id);
 }
 
 bool MapReplica::thaw(Keyframe* keyframe) {
@@ -109,7 +163,177 @@ bool MapReplica::thaw(Keyframe* keyframe) {
   const Expected<cv::Mat> grey = decodeImage(jpeg.data(), jpeg.size(), 1, camera_.width, camera_.height);
   if (!grey) return false;  // cannot happen with bytes this process encoded (CRC-checked); stays cold
   buildPyramid(*grey, kMaxLevels, &keyframe->pyramid);
+  loadPoints(keyframe->id);  // the entry stays until the keyframe is frozen again, or culled
   return true;
+}
+
+// The ids sorted: a point on storage is found by binary search (findStored).
+bool MapReplica::storePoints(KeyframeId id) {
+  if (!store_ || !store_points_ || stored_.count(id)) return false;
+  const auto loaded = std::find_if(loaded_.begin(), loaded_.end(), [id](const Loaded& e) { return e.id == id; });
+  const std::optional<uint32_t> read_as = loaded == loaded_.end() ? std::nullopt : loaded->checksum;
+  forgetLoaded(id);
+  std::vector<PointId> ids = describedBy(id);
+  if (ids.empty()) {  // none left since it was read back
+    store_->removeLater(id, KeyframeStore::Kind::kPoints);
+    return false;
+  }
+  std::sort(ids.begin(), ids.end());
+  const std::vector<uint8_t> bytes = encodePoints(map_, ids);
+  if (read_as != KeyframeStore::checksum(bytes) || !store_->has(id, KeyframeStore::Kind::kPoints)) {
+    // The old bytes' hole is punched later (applyDeferred: 0.2 ms each), not on this call.
+    store_->removeLater(id, KeyframeStore::Kind::kPoints);
+    if (!store_->put(id, KeyframeStore::Kind::kPoints, bytes)) return false;  // full: they stay
+  }
+  StoredPoints stored;
+  stored.positions.reserve(ids.size());
+  stored.uvs.reserve(ids.size());
+  stored.levels.reserve(ids.size());
+  for (PointId pid : ids) {
+    const MapPoint& point = *map_.point(pid);
+    stored.positions.push_back(point.p_w);
+    stored.uvs.push_back({point.source_uv.x(), point.source_uv.y()});
+    stored.levels.push_back(static_cast<int8_t>(point.source_level));
+    const KeyframeId block = keyframeOfPoint(pid);
+    if (std::find(stored.blocks.begin(), stored.blocks.end(), block) == stored.blocks.end()) {
+      stored.blocks.push_back(block);
+    }
+    map_.removePoint(pid);  // no slot: the keyframe is cold
+  }
+  stored.ids = std::move(ids);
+  for (KeyframeId block : stored.blocks) stored_blocks_[block].push_back(id);
+  stored_points_ += stored.ids.size();
+  io_entries_ += stored.ids.size() + kStoreReleaseEntries;
+  stored_.emplace(id, std::move(stored));
+  described_.erase(id);
+  return true;
+}
+
+// The points in the store's bytes that are still the keyframe's (removals since are not
+// written), at the positions memory holds. The entry stays: put back unchanged, it is not
+// written again.
+void MapReplica::loadPoints(KeyframeId id) {
+  if (!stored_.count(id)) return;
+  const StoredPoints stored = takeStored(id);
+  io_entries_ += stored.ids.size() + kStoreReleaseEntries;
+  const Expected<std::vector<uint8_t>> bytes = store_->get(id, KeyframeStore::Kind::kPoints);
+  std::optional<std::vector<StoredPoint>> points;
+  if (bytes) points = decodePoints(*bytes);
+  std::vector<PointId>& described = described_[id];
+  described.reserve(stored.ids.size());
+  if (points) {
+    for (const StoredPoint& s : *points) {
+      const auto at = std::lower_bound(stored.ids.begin(), stored.ids.end(), s.id);
+      if (at == stored.ids.end() || *at != s.id) continue;  // removed while on storage
+      const auto i = static_cast<size_t>(at - stored.ids.begin());
+      MapPoint point;
+      point.id = s.id;
+      point.p_w = stored.positions[i];
+      point.source_keyframe = id;
+      point.source_level = stored.levels[i];
+      point.source_uv = Eigen::Vector2d(stored.uvs[i][0], stored.uvs[i][1]);
+      point.times_projected = s.times_projected;
+      point.times_found = s.times_found;
+      point.depth_record.checks = s.checks;
+      point.depth_record.seen_through = s.seen_through;
+      point.depth_record.missing = s.missing;
+      point.depth_record.read_max_m = s.read_max_m;
+      map_.addPoint(point);
+      described.push_back(point.id);
+    }
+  }
+  if (described.size() != stored.ids.size()) {
+    // The storage failed (counted by the store): the keyframe goes on without these points
+    // until a snapshot sends them again. Cannot happen otherwise: the bytes are CRC-checked.
+    points_lost_ += static_cast<int64_t>(stored.ids.size() - described.size());
+    store_->remove(id, KeyframeStore::Kind::kPoints);
+  }
+  if (described.empty()) described_.erase(id);
+  noteLoaded(id, bytes && points ? std::optional<uint32_t>(KeyframeStore::checksum(*bytes)) : std::nullopt);
+}
+
+// Memory's list of a keyframe's points on storage, taken out of the index (the store's
+// entry is the caller's); empty if it has none there.
+MapReplica::StoredPoints MapReplica::takeStored(KeyframeId id) {
+  const auto it = stored_.find(id);
+  if (it == stored_.end()) return {};
+  StoredPoints stored = std::move(it->second);
+  stored_.erase(it);
+  for (KeyframeId block : stored.blocks) {
+    const auto holders = stored_blocks_.find(block);
+    holders->second.erase(std::find(holders->second.begin(), holders->second.end(), id));
+    if (holders->second.empty()) stored_blocks_.erase(holders);
+  }
+  stored_points_ -= stored.ids.size();
+  return stored;
+}
+
+std::optional<MapReplica::StoredAt> MapReplica::findStored(PointId id) {
+  const auto holders = stored_blocks_.find(keyframeOfPoint(id));
+  if (holders == stored_blocks_.end()) return std::nullopt;
+  for (KeyframeId holder : holders->second) {
+    StoredPoints& stored = stored_.at(holder);
+    const auto at = std::lower_bound(stored.ids.begin(), stored.ids.end(), id);
+    if (at != stored.ids.end() && *at == id) {
+      return StoredAt{holder, &stored, static_cast<size_t>(at - stored.ids.begin())};
+    }
+  }
+  return std::nullopt;
+}
+
+void MapReplica::removeStored(const StoredAt& at) {
+  StoredPoints& p = *at.points;
+  const auto i = static_cast<std::ptrdiff_t>(at.index);
+  p.ids.erase(p.ids.begin() + i);
+  p.positions.erase(p.positions.begin() + i);
+  p.uvs.erase(p.uvs.begin() + i);
+  p.levels.erase(p.levels.begin() + i);
+  --stored_points_;
+  if (!at.points->ids.empty()) return;
+  takeStored(at.keyframe);
+  store_->removeLater(at.keyframe, KeyframeStore::Kind::kPoints);
+}
+
+bool MapReplica::moveStored(PointId id, const Vec3& p_w) {
+  if (stored_.empty()) return false;
+  const std::optional<StoredAt> at = findStored(id);
+  if (!at) return false;
+  at->points->positions[at->index] = p_w;
+  growBounds(at->keyframe, p_w);
+  return true;
+}
+
+void MapReplica::noteLoaded(KeyframeId id, std::optional<uint32_t> checksum) {
+  const auto it = std::find_if(loaded_.begin(), loaded_.end(), [id](const Loaded& e) { return e.id == id; });
+  if (it != loaded_.end()) {
+    if (!checksum) checksum = it->checksum;
+    loaded_.erase(it);
+  }
+  loaded_.push_back({id, checksum});  // the newest last
+}
+
+void MapReplica::forgetLoaded(KeyframeId id) {
+  loaded_.erase(std::remove_if(loaded_.begin(), loaded_.end(), [id](const Loaded& e) { return e.id == id; }),
+                loaded_.end());
+}
+
+// The cold keyframes read back (or given points while cold) go to the store, but for the
+// newest few while work is held back (kLoadedKeptForDeferred). Hot ones are remembered until
+// they are frozen (a keyframe thawed and frozen again unsearched, as relocalisation does, is
+// not written again); culled ones are forgotten.
+void MapReplica::storeLoaded() {
+  if (loaded_.empty()) return;
+  std::vector<KeyframeId> cold;
+  for (const Loaded& e : loaded_) {
+    const Keyframe* keyframe = map_.keyframe(e.id);
+    if (keyframe && keyframe->cold()) cold.push_back(e.id);
+  }
+  loaded_.erase(std::remove_if(loaded_.begin(), loaded_.end(), [&](const Loaded& e) { return !map_.hasKeyframe(e.id); }),
+                loaded_.end());
+  const size_t keep = deferred_.empty() ? 0 : kLoadedKeptForDeferred;
+  for (size_t i = 0; i + keep < cold.size(); ++i) {
+    if (!storePoints(cold[i])) forgetLoaded(cold[i]);  // none left, or the store full: they stay
+  }
 }
 
 // Slots for the points the keyframes describe (from the index), in point id order (the
@@ -150,7 +374,17 @@ MapReplica::Bounds MapReplica::boundsOf(KeyframeId id) const {
   return it == bounds_.end() ? Bounds{} : it->second;
 }
 
+// A keyframe's points are all in memory or all on storage: a point put in a keyframe on
+// storage, or taken from one (re-described), reads its points back first.
 MapPoint* MapReplica::putPoint(const MapPoint& point) {
+  loadPoints(point.source_keyframe);
+  if (!stored_.empty() && !map_.point(point.id)) {
+    if (const std::optional<StoredAt> at = findStored(point.id)) loadPoints(at->keyframe);
+  }
+  if (store_ && store_points_) {
+    const Keyframe* source = map_.keyframe(point.source_keyframe);
+    if (source && source->cold()) noteLoaded(point.source_keyframe);  // to the store with the rest
+  }
   const MapPoint* before = map_.point(point.id);
   if (!before || before->source_keyframe != point.source_keyframe) {
     if (before) unindex(before->source_keyframe, point.id);
@@ -206,6 +440,10 @@ void MapReplica::clear() {
   described_.clear();
   bounds_.clear();
   deferred_ = Deferred{};
+  stored_.clear();
+  stored_blocks_.clear();
+  loaded_.clear();
+  stored_points_ = 0;
 }
 
 // Adds the point's slot, or re-initialises it (dropping its patch cache) if it exists. A
@@ -240,6 +478,10 @@ void MapReplica::removeSlot(PointId id) {
 }
 
 void MapReplica::removePoint(PointId id) {
+  if (!stored_.empty() && !map_.point(id)) {
+    if (const std::optional<StoredAt> at = findStored(id)) removeStored(*at);  // no read: memory lists its points
+    return;
+  }
   removeSlot(id);
   if (const MapPoint* point = map_.point(id)) {
     unindex(point->source_keyframe, id);
@@ -251,6 +493,17 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
   applyDeferred(SIZE_MAX);  // versions in order
   bool unknown = false;
   acked_below_ = std::max(acked_below_, update.acked_below);
+  // A point re-described from a keyframe on storage culled now keeps its statistics and depth
+  // record (below): that keyframe's points are read back first. Other culled keyframes' are
+  // not read (removeKeyframe).
+  if (!stored_.empty() && !update.removed_keyframes.empty()) {
+    const std::unordered_set<KeyframeId> culled(update.removed_keyframes.begin(), update.removed_keyframes.end());
+    for (const MapPointData& p : update.points) {
+      if (map_.point(p.id)) continue;
+      const std::optional<StoredAt> at = findStored(p.id);
+      if (at && culled.count(at->keyframe)) loadPoints(at->keyframe);
+    }
+  }
   std::map<KeyframeId, KeyframeId> renamed;  // parts the mapper joined to others
   for (const KeyframePose& pose : update.keyframes) {
     Keyframe* keyframe = map_.keyframe(pose.id);
@@ -302,13 +555,16 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       putPointAndSlot(p);
     }
   }
-  // Moves go in at once, cold or not: telling them apart costs as much as moving them.
+  // Moves go in at once, cold or not: telling them apart costs as much as moving them (the
+  // positions of points on storage are in memory).
   for (const PointPosition& moved : update.moved_points) {
-    if (MapPoint* point = map_.point(moved.id)) {
-      point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
-      growBounds(point->source_keyframe, point->p_w);
-    } else {
-      unknown = true;
+    if (!moveStored(moved.id, moved.p_w)) {
+      if (MapPoint* point = map_.point(moved.id)) {
+        point->p_w = moved.p_w;  // same patch: slot and patch cache stay valid
+        growBounds(point->source_keyframe, point->p_w);
+      } else {
+        unknown = true;
+      }
     }
   }
   for (PointId id : update.removed_points) {
@@ -318,6 +574,7 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       removePoint(id);
     }
   }
+
   // Culled keyframes go at once (the tracker's parts, anchor and bag of words follow the
   // keyframes), their store entries' bytes later.
   for (KeyframeId id : update.removed_keyframes) {
@@ -329,6 +586,7 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       removeKeyframe(id, /*store_later=*/defer_cold);
     }
   }
+  storeLoaded();
   return !unknown;
 }
 
@@ -337,14 +595,17 @@ bool MapReplica::Deferred::empty() const {
 }
 
 // In the order apply() would have taken them: a snapshot's culled points, the points, the
-// removed points; then the keyframe store's holes.
+// removed points; then the keyframe store's holes. Reading points back from the store and
+// writing them count too (io_entries_).
 size_t MapReplica::applyDeferred(size_t max_entries) {
   Deferred& d = deferred_;
   size_t done = 0;
-  for (; done < max_entries && d.next_gone < d.gone_in.size(); ++d.next_gone) {
+  const size_t io_before = io_entries_;
+  const auto more = [&] { return done + (io_entries_ - io_before) < max_entries; };
+  for (; more() && d.next_gone < d.gone_in.size(); ++d.next_gone) {
     done += removeAbsentPoints(d.gone_in[d.next_gone]);
   }
-  for (; done < max_entries && d.next_point < d.points.size(); ++d.next_point, ++done) {
+  for (; more() && d.next_point < d.points.size(); ++d.next_point, ++done) {
     const MapPointData& p = d.points[d.next_point];
     if (map_.hasKeyframe(p.source_keyframe)) {
       putPointAndSlot(p);
@@ -352,9 +613,11 @@ size_t MapReplica::applyDeferred(size_t max_entries) {
       removePoint(p.id);  // its new source culled since (a whole apply puts it, then culls it)
     }
   }
-  for (; done < max_entries && d.next_removed_point < d.removed_points.size(); ++d.next_removed_point, ++done) {
+  for (; more() && d.next_removed_point < d.removed_points.size(); ++d.next_removed_point, ++done) {
     removePoint(d.removed_points[d.next_removed_point]);
   }
+  done += io_entries_ - io_before;
+  storeLoaded();
   if (d.empty()) d = Deferred{};  // its memory too
   if (store_ && done < max_entries) store_->releaseQueued((max_entries - done) / kStoreReleaseEntries + 1);
   return hasDeferred() ? 1 : 0;
@@ -363,6 +626,17 @@ size_t MapReplica::applyDeferred(size_t max_entries) {
 bool MapReplica::hasDeferred() const { return !deferred_.empty() || (store_ && store_->queued() > 0); }
 
 void MapReplica::putPointAndSlot(const MapPointData& p) {
+  if (!stored_.empty() && !map_.point(p.id)) {
+    // On storage with the same patch: only its position changes (Map::addPoint keeps the
+    // statistics), in memory.
+    const std::optional<StoredAt> at = findStored(p.id);
+    if (at && at->keyframe == p.source_keyframe && at->points->levels[at->index] == p.level &&
+        at->points->uvs[at->index][0] == p.uv.x() && at->points->uvs[at->index][1] == p.uv.y()) {
+      at->points->positions[at->index] = p.p_w;
+      growBounds(at->keyframe, p.p_w);
+      return;
+    }
+  }
   const MapPoint* before = map_.point(p.id);
   const bool same_patch = before && before->source_keyframe == p.source_keyframe && before->source_level == p.level &&
                           before->source_uv == p.uv;
@@ -374,6 +648,14 @@ void MapReplica::putPointAndSlot(const MapPointData& p) {
 // A snapshot's points of keyframe 'id' absent from it (deferred_.kept), in slot order (as in
 // freeze()). Returns how many points were looked at.
 size_t MapReplica::removeAbsentPoints(KeyframeId id) {
+  if (const auto it = stored_.find(id); it != stored_.end()) {  // in memory's list, without a read
+    const size_t looked_at = it->second.ids.size() + 1;
+    const std::vector<PointId> ids = it->second.ids;
+    for (PointId pid : ids) {
+      if (!std::binary_search(deferred_.kept.begin(), deferred_.kept.end(), pid)) removePoint(pid);
+    }
+    return looked_at;
+  }
   const std::vector<PointId>& points = describedBy(id);
   std::vector<std::pair<size_t, PointId>> gone;
   for (PointId pid : points) {
@@ -396,6 +678,7 @@ size_t MapReplica::removeAbsentPoints(KeyframeId id) {
 // keyframe's) leave the slots as they are.
 void MapReplica::removeKeyframe(KeyframeId id, bool store_later) {
   if (!map_.hasKeyframe(id)) return;
+  takeStored(id);  // its points on storage go unread (the store's entries go below)
   std::vector<std::pair<size_t, PointId>> described;
   for (PointId pid : describedBy(id)) {
     const auto it = slot_index_.find(pid);

@@ -174,7 +174,7 @@ class Tracker::Impl {
       return;
     }
     store_ = std::move(*store);
-    replica_.setStore(store_.get());
+    replica_.setStore(store_.get(), options.local_map.store_points);
   }
 
   TrackResult track(const RgbdFrame& frame) {
@@ -287,6 +287,7 @@ class Tracker::Impl {
     return replica_.applyDeferred(max_entries) > 0;
   }
   const Map& map() const { return replica_.map(); }
+  const MapReplica& replica() const { return replica_; }
   const KeyframeStore* keyframeStore() const { return store_.get(); }
   const Status& keyframeStoreStatus() const { return store_status_; }
   void load(const LoadedMap& loaded, bool add_keyframes);
@@ -1869,9 +1870,9 @@ void Tracker::Impl::countColdInView() {
     if (bounds.radius < 0.0 || !sphereMayBeInView(camera_, T_c_w, bounds.centre, bounds.radius, options_.projection)) {
       continue;
     }
-    for (PointId pid : replica_.describedBy(id)) {
-      if (inView(camera_, T_c_w, replica_.map().point(pid)->p_w, options_.projection)) ++points_in_view_[kf];
-    }
+    replica_.forEachPosition(id, [&](const Vec3& p_w) {
+      if (inView(camera_, T_c_w, p_w, options_.projection)) ++points_in_view_[kf];
+    });
   }
 }
 
@@ -2015,7 +2016,10 @@ long Tracker::framesReckoned() const { return impl_->framesReckoned(); }
 std::string Tracker::frameError(const RgbdFrame& frame) const { return impl_->frameError(frame); }
 bool Tracker::applyMap(const MapUpdate& update, bool defer_cold) { return impl_->applyMap(update, defer_cold); }
 bool Tracker::applyDeferredMap(size_t max_entries) { return impl_->applyDeferredMap(max_entries); }
+bool Tracker::hasDeferredMapWork() const { return impl_->replica().hasDeferred(); }
 const Map& Tracker::map() const { return impl_->map(); }
+size_t Tracker::numPoints() const { return impl_->replica().numPoints(); }
+size_t Tracker::pointsOnStorage() const { return impl_->replica().storedPoints(); }
 void Tracker::reset() { impl_->reset(); }
 void Tracker::load(const LoadedMap& loaded, bool add_keyframes) { impl_->load(loaded, add_keyframes); }
 const KeyframeStore* Tracker::keyframeStore() const { return impl_->keyframeStore(); }

@@ -26,19 +26,37 @@
 //   keyframe's points in view from the points themselves (point_projection.h, inView),
 //   found by the replica's index of each keyframe's points (describedBy), and only for the
 //   keyframes whose points' bounding sphere may be in view (boundsOf, sphereMayBeInView).
+//   Points on storage: with a store and LocalMapOptions::store_points, a keyframe going cold
+//   puts its points in the store too (Kind::kPoints: what the tracker learnt of each, its
+//   statistics and depth record), and memory keeps what the map says of them (id, position,
+//   patch: StoredPoints), so that a version moving such a point, sending it again with the
+//   same patch, removing it or leaving it out of a snapshot changes memory's lists only, and
+//   the count in view (forEachPosition) is the same. Its keyframe's points are read back
+//   when it is thawed, when a version puts a new point in it or takes one to another
+//   keyframe, or re-describes a point of it as it is culled; cold again, they go back at the
+//   end of the call (apply, applyDeferred, updateLocalMap; the newest 4 stay while work is
+//   held back), written only if their bytes changed. Why: over a 10-minute flight the
+//   tracker's map grew from 7.6 to 42 thousand points, nearly all of cold keyframes
+//   (docs/open_work.md, sessions 40 and 41).
 // Memory: every keyframe's pose and small blurry image (compact: its image only, 4.8 kB at
 // 640x480; the relocaliser restores the gradients and support it aligns with); every point
-// (about 150 bytes with its hash-map entry; no measurements: Keyframe::releaseMappingData);
-// the slots of the hot keyframes' points only (about 250 bytes each with their index; over
+// in memory (about 150 bytes with its hash-map entry; no measurements:
+// Keyframe::releaseMappingData), but the cold keyframes' points on storage, 49 bytes each in
+// memory (with a store); the slots
+// of the hot keyframes' points only (about 250 bytes each with their index; over
 // a long flight most points are cold); the pyramids of the hot keyframes (0.41 MB each at
 // 640x480; the tracker frees a keyframe's metric depth, corners and measurements once its
 // points are made) and the JPEG of the cold ones (30-60 kB at quality 90 on textured
 // 640x480 images), unless a keyframe store (keyframe_store.h) holds those: then a
 // keyframe's JPEG is written there when it first goes cold and read back to thaw it.
 // Threads: not thread-safe; the tracker's thread owns it.
+#include <array>
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "rgbdslam/camera/pinhole_camera.h"
@@ -66,6 +84,7 @@ struct LocalMapOptions {
   int jpeg_quality = 90;       // cold keyframes' images [1, 100]
   // Where cold keyframes' images and extras go (keyframe_store.h); empty: they stay in memory.
   std::string store_dir = "/var/tmp";
+  bool store_points = true;  // cold keyframes' points go to the store too (with a store_dir)
   void bind(OptionRegistry* registry, const std::string& section);  // as local_map_*
 };
 
@@ -78,8 +97,12 @@ class MapReplica {
  public:
   explicit MapReplica(const PinholeCamera& camera) : camera_(camera) {}
   // Cold keyframes' JPEGs go to 'store' (owned by the caller, outliving the replica;
-  // nullptr: they stay in memory). Set before the first keyframe.
-  void setStore(KeyframeStore* store) { store_ = store; }
+  // nullptr: they stay in memory), and with 'points' their points too. Set before the first
+  // keyframe.
+  void setStore(KeyframeStore* store, bool points = true) {
+    store_ = store;
+    store_points_ = points;
+  }
 
   Keyframe* addKeyframe(std::unique_ptr<Keyframe> keyframe);
   // A point from depth created in its source keyframe. Its measurement there is not kept:
@@ -114,7 +137,14 @@ class MapReplica {
                                 int max_freezes, int jpeg_quality, int max_hot = 0);
   int hotKeyframes() const;
 
+  // The map's keyframes and the points in memory (the points on storage are not in it).
   const Map& map() const { return map_; }
+  size_t numPoints() const { return map_.numPoints() + stored_points_; }  // in memory and on storage
+  size_t storedPoints() const { return stored_points_; }
+  int64_t pointsLost() const { return points_lost_; }  // on storage that failed (store's errors)
+  // f(p_w) for each point the keyframe describes, in memory or on storage, in no order.
+  template <typename F>
+  void forEachPosition(KeyframeId id, F&& f) const;
   std::vector<PointSlot>& slots() { return slots_; }
 
   // The points a keyframe describes (is the source of), in no order; kept with every change
@@ -144,6 +174,26 @@ class MapReplica {
   bool thaw(Keyframe* keyframe);  // the pyramid only: addSlotsOf() then makes the slots
   void addSlotsOf(const std::unordered_set<KeyframeId>& keyframes);
   void freeze(Keyframe* keyframe, int jpeg_quality);
+  // Points on storage. storePoints: a cold keyframe's points to the store (false: none, or
+  // the store refused them: they stay). loadPoints: back into memory, if on storage.
+  // findStored: where a point on storage is listed. storeLoaded: the keyframes read back (or
+  // given points while cold) go back, but for the newest few while work is held back
+  // (applyDeferred goes on with them).
+  struct StoredPoints;
+  struct StoredAt {
+    KeyframeId keyframe;
+    StoredPoints* points;
+    size_t index;
+  };
+  bool storePoints(KeyframeId id);
+  void loadPoints(KeyframeId id);
+  StoredPoints takeStored(KeyframeId id);
+  std::optional<StoredAt> findStored(PointId id);
+  void removeStored(const StoredAt& at);
+  bool moveStored(PointId id, const Vec3& p_w);  // false: not on storage
+  void noteLoaded(KeyframeId id, std::optional<uint32_t> checksum = std::nullopt);
+  void storeLoaded();
+  void forgetLoaded(KeyframeId id);
 
   PinholeCamera camera_;
   KeyframeStore* store_ = nullptr;
@@ -153,6 +203,28 @@ class MapReplica {
   std::unordered_map<PointId, size_t> slot_index_;
   std::unordered_map<KeyframeId, std::vector<PointId>> described_;
   std::unordered_map<KeyframeId, Bounds> bounds_;
+  bool store_points_ = true;
+  // A cold keyframe's points on storage: what the map says of them, in memory (49 bytes a
+  // point), in id order; their statistics and depth records are in the store.
+  struct StoredPoints {
+    std::vector<PointId> ids;
+    std::vector<Vec3> positions;
+    std::vector<std::array<double, 2>> uvs;  // the patch: source pixel and level
+    std::vector<int8_t> levels;
+    std::vector<KeyframeId> blocks;  // the id blocks of its points (keyframeOfPoint), each once
+  };
+  std::unordered_map<KeyframeId, StoredPoints> stored_;
+  std::unordered_map<KeyframeId, std::vector<KeyframeId>> stored_blocks_;  // block -> keyframes in stored_
+  // Read back (or given points while cold) and not yet put back (storeLoaded), oldest first,
+  // with the checksum of the bytes read (none: write them).
+  struct Loaded {
+    KeyframeId id;
+    std::optional<uint32_t> checksum;
+  };
+  std::vector<Loaded> loaded_;
+  size_t stored_points_ = 0;
+  int64_t points_lost_ = 0;
+  size_t io_entries_ = 0;  // work of the store's reads and writes, in applyDeferred()'s entries
   // Work held back by apply(defer_cold), each list done from its 'next' on.
   struct Deferred {
     std::vector<PointId> kept;       // a snapshot's point ids, sorted
@@ -164,5 +236,14 @@ class MapReplica {
   };
   Deferred deferred_;
 };
+
+template <typename F>
+void MapReplica::forEachPosition(KeyframeId id, F&& f) const {
+  if (const auto it = stored_.find(id); it != stored_.end()) {
+    for (const Vec3& p_w : it->second.positions) f(p_w);
+    return;
+  }
+  for (PointId pid : describedBy(id)) f(map_.point(pid)->p_w);
+}
 
 }  // namespace rgbdslam

@@ -383,9 +383,14 @@ class Tracker {
   // the next applyMap() does what is left first.
   bool applyMap(const MapUpdate& update, bool defer_cold = false);
   bool applyDeferredMap(size_t max_entries);
+  bool hasDeferredMapWork() const;  // what applyDeferredMap() would return before its work
   void load(const LoadedMap& loaded, bool add_keyframes);
 
-  const Map& map() const;
+  const Map& map() const;  // its points are those in memory
+  // The map's points in memory and on storage (MapReplica: a cold keyframe's points on the
+  // keyframe store), and those on storage.
+  size_t numPoints() const;
+  size_t pointsOnStorage() const;
   void reset();  // forget the map; the next frame initialises a new one
   // The store of cold keyframes (TrackerOptions::local_map.store_dir), nullptr when there is
   // none; its status says why when one was asked for and could not be made (the processes
