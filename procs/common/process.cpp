@@ -103,6 +103,7 @@ void printPeakRss() {
   } else {
     std::printf("peak_rss_mb %.1f\n", usage.peak_rss_kb / 1024.0);
   }
+  if (usage.heap_kb >= 0) std::printf("heap_mb %.1f\n", usage.heap_kb / 1024.0);
 }
 
 void printKeyframesKept(const KeyframesKept& kept) {

@@ -37,7 +37,8 @@ struct MemoryUsage {
   int64_t heap_kb = -1;
 };
 MemoryUsage memoryUsage();
-// Prints "peak_rss_mb X.X" (or "peak_rss_mb unknown") on stdout, the exit summary's form.
+// Prints "peak_rss_mb X.X" (or "peak_rss_mb unknown") on stdout, the exit summary's form,
+// and "heap_mb X.X", malloc's bytes in use now (what the program holds at exit).
 void printPeakRss();
 // keyframes_kept_<reason> lines on stdout: why the mapper's keyframes stay (map_maintenance.h).
 void printKeyframesKept(const KeyframesKept& kept);

@@ -351,6 +351,7 @@ void TrackerNode::readTrackerFigures() {
   const KeyframeStore* store = tracker_.keyframeStore();
   tracker_figures_ = TrackerFigures{static_cast<int64_t>(tracker_.numPoints()),
                                     static_cast<int64_t>(tracker_.pointsOnStorage()),
+                                    tracker_.pointsLostOnStorage(),
                                     hotKeyframes(tracker_.map()),
                                     store ? static_cast<int64_t>(store->entries()) : 0,
                                     store ? store->bytes() / 1024 : 0,
@@ -528,6 +529,7 @@ void TrackerNode::publishStatus() {
                      {"keyframe_rung", c.last_rung},
                      {"points", t.points},
                      {"points_on_storage", t.points_on_storage},
+                     {"points_lost_on_storage", t.points_lost_on_storage},
                      {"keyframes_hot", t.keyframes_hot},
                      {"keyframe_store_entries", t.store_entries},
                      {"keyframe_store_kb", t.store_kb},
@@ -609,10 +611,11 @@ void TrackerNode::printSummary() const {
               frames_followed_, follow_ms_.quantile(0.5), follow_ms_.quantile(0.99), follow_ms_.quantile(1.0));
   std::printf("new_parts %ld\nparts_rejoined %ld\n", c.new_parts, tracker_.rejoins());  // the relocaliser has stopped
   if (const KeyframeStore* store = tracker_.keyframeStore()) {
-    std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\npoints %zu\npoints_on_storage %zu\n",
-                store->bytes() / 1048576.0, static_cast<long>(store->errors()), tracker_.numPoints(),
-                tracker_.pointsOnStorage());
+    std::printf("keyframe_store_mb %.1f\nkeyframe_store_errors %ld\n", store->bytes() / 1048576.0,
+                static_cast<long>(store->errors()));
   }
+  std::printf("points %zu\npoints_on_storage %zu\npoints_lost_on_storage %lld\n", tracker_.numPoints(),
+              tracker_.pointsOnStorage(), static_cast<long long>(tracker_.pointsLostOnStorage()));
   std::printf("frames %ld\nposes %ld\nlost_frames %ld\nbad_frames %ld\nbad_messages %ld\n", c.frames,
               c.poses, c.lost, c.bad_frames, c.bad_frame_messages + c.bad_map_messages);
   std::printf("keyframes %ld\nkeyframes_acked %ld\nkeyframes_unacked %zu\nkeyframes_unacked_lost %lld\n"

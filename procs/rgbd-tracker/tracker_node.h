@@ -129,7 +129,7 @@ class TrackerNode {
   // What the status reports of the tracker's map and store, read while this thread holds
   // the tracker; while the relocaliser does, the status reports the last read.
   struct TrackerFigures {
-    int64_t points = 0, points_on_storage = 0, keyframes_hot = 0, store_entries = 0, store_kb = 0, store_disk_kb = 0, store_errors = 0;
+    int64_t points = 0, points_on_storage = 0, points_lost_on_storage = 0, keyframes_hot = 0, store_entries = 0, store_kb = 0, store_disk_kb = 0, store_errors = 0;
   };
   void readTrackerFigures();
   TrackerFigures tracker_figures_;

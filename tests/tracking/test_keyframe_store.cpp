@@ -57,6 +57,27 @@ TEST(KeyframeStore, GivesBackWhatWasPutUntilItIsRemoved) {
   EXPECT_EQ(store.errors(), 0);
 }
 
+// A replaced entry's bytes can be given back later (release_later, as the tracker's points of
+// a cold keyframe are replaced between frames): the new bytes at once, the hole queued.
+TEST(KeyframeStore, AReplacedEntrysBytesCanGoBackLater) {
+  Expected<std::unique_ptr<KeyframeStore>> opened = KeyframeStore::open(::testing::TempDir());
+  ASSERT_TRUE(opened) << opened.error();
+  KeyframeStore& store = **opened;
+  ASSERT_TRUE(store.put(2, KeyframeStore::Kind::kPoints, bytesOf(40000, 1), /*release_later=*/true));
+  EXPECT_EQ(store.queued(), 0u) << "nothing replaced";
+  ASSERT_TRUE(store.put(2, KeyframeStore::Kind::kPoints, bytesOf(30000, 5), /*release_later=*/true));
+  EXPECT_EQ(store.queued(), 1u);
+  EXPECT_EQ(store.entries(KeyframeStore::Kind::kPoints), 1u);
+  EXPECT_EQ(store.bytes(), 30000);
+  EXPECT_EQ(*store.get(2, KeyframeStore::Kind::kPoints), bytesOf(30000, 5));
+  EXPECT_EQ(store.releaseQueued(10), 0u);
+  EXPECT_EQ(store.queued(), 0u);
+  EXPECT_EQ(KeyframeStore::checksum(bytesOf(30000, 5)), KeyframeStore::checksum(*store.get(2, KeyframeStore::Kind::kPoints)));
+  EXPECT_NE(KeyframeStore::checksum(bytesOf(30000, 5)), KeyframeStore::checksum(bytesOf(30000, 6)));
+  EXPECT_FALSE(store.full());
+  EXPECT_EQ(store.errors(), 0);
+}
+
 TEST(KeyframeStore, ADirectoryItCannotUseIsAClearError) {
   for (const std::string& directory : {std::string("/nonexistent/rgbd-slam-test"), std::string("/proc/self/status")}) {
     const Expected<std::unique_ptr<KeyframeStore>> opened = KeyframeStore::open(directory);

@@ -52,9 +52,8 @@ KeyframeStore::~KeyframeStore() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-bool KeyframeStore::put(KeyframeId id, Kind kind, const std::vector<uint8_t>& bytes) {
+bool KeyframeStore::put(KeyframeId id, Kind kind, const std::vector<uint8_t>& bytes, bool release_later) {
   if (full_) return false;
-  remove(id, kind);
   // Each entry starts on a block of its own, so that removing it gives all its blocks back.
   const int64_t start = (end_ + block_ - 1) / block_ * block_;
   size_t written = 0;
@@ -62,13 +61,23 @@ bool KeyframeStore::put(KeyframeId id, Kind kind, const std::vector<uint8_t>& by
     const ssize_t n = ::pwrite(fd_, bytes.data() + written, bytes.size() - written,
                                static_cast<off_t>(start + static_cast<int64_t>(written)));
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {  // storage full or failing: what was written of it is given back
+    if (n <= 0) {  // storage full or failing: what was written of it is given back, the old entry stays
       release(Entry{start, static_cast<int64_t>(written), 0});
       ++errors_;
       full_ = true;
       return false;
     }
     written += static_cast<size_t>(n);
+  }
+  if (const auto old = index_.find(key(id, kind)); old != index_.end()) {  // replaced
+    if (release_later) {
+      queued_.push_back(old->second);
+    } else {
+      release(old->second);
+    }
+    live_bytes_ -= old->second.size;
+    --kind_entries_[static_cast<size_t>(kind)];
+    index_.erase(old);
   }
   const Entry entry{start, static_cast<int64_t>(bytes.size()), crcOf(bytes.data(), bytes.size())};
   index_[key(id, kind)] = entry;

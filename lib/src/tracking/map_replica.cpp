@@ -26,6 +26,9 @@ constexpr size_t kStoreReleaseEntries = 100;
 // put back after each step of 200 entries and read again for the next would cost a write
 // and a read a step.
 constexpr size_t kLoadedKeptForDeferred = 4;
+// Keyframes read back and cold again put back to the store per step of applyDeferred (a write
+// each, if their bytes changed).
+constexpr size_t kPutBackPerStep = 2;
 
 // A point on storage (KeyframeStore::Kind::kPoints): what the tracker learnt of it, its
 // statistics and depth record. What the map says of it (position, patch) stays in memory
@@ -101,10 +104,7 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
     }
   }
   addSlotsOf(thawed);
-  if (max_freezes <= 0) {
-    storeLoaded();
-    return change;
-  }
+  if (max_freezes <= 0) return change;
   // At least as many frozen as thawed: a lost tracker thaws around every relocalisation
   // candidate (8 each, several candidates a frame), and with only max_freezes going back the
   // hot set grew to 117 of a window of 40 on the flight (+35 MB of pyramids).
@@ -120,7 +120,6 @@ LocalMapChange MapReplica::updateLocalMap(const std::vector<KeyframeId>& wanted,
       if (++change.frozen >= freezes) break;
     }
   }
-  storeLoaded();
   return change;
 }
 
@@ -169,22 +168,28 @@ bool MapReplica::thaw(Keyframe* keyframe) {
 
 // The ids sorted: a point on storage is found by binary search (findStored).
 bool MapReplica::storePoints(KeyframeId id) {
-  if (!store_ || !store_points_ || stored_.count(id)) return false;
+  if (!store_ || !store_points_ || stored_.count(id)) {
+    forgetLoaded(id);
+    return false;
+  }
   const auto loaded = std::find_if(loaded_.begin(), loaded_.end(), [id](const Loaded& e) { return e.id == id; });
-  const std::optional<uint32_t> read_as = loaded == loaded_.end() ? std::nullopt : loaded->checksum;
-  forgetLoaded(id);
+  const Loaded read = loaded == loaded_.end() ? Loaded{id} : *loaded;
   std::vector<PointId> ids = describedBy(id);
   if (ids.empty()) {  // none left since it was read back
+    forgetLoaded(id);
     store_->removeLater(id, KeyframeStore::Kind::kPoints);
     return false;
   }
   std::sort(ids.begin(), ids.end());
   const std::vector<uint8_t> bytes = encodePoints(map_, ids);
-  if (read_as != KeyframeStore::checksum(bytes) || !store_->has(id, KeyframeStore::Kind::kPoints)) {
-    // The old bytes' hole is punched later (applyDeferred: 0.2 ms each), not on this call.
-    store_->removeLater(id, KeyframeStore::Kind::kPoints);
-    if (!store_->put(id, KeyframeStore::Kind::kPoints, bytes)) return false;  // full: they stay
+  const bool unchanged = read.read && read.size == bytes.size() && read.checksum == KeyframeStore::checksum(bytes) &&
+                         store_->has(id, KeyframeStore::Kind::kPoints);
+  // A replaced entry's hole is punched later (applyDeferred: 0.2 ms each), not on this call.
+  if (!unchanged && !store_->put(id, KeyframeStore::Kind::kPoints, bytes, /*release_later=*/true)) {
+    noteLoaded(id);  // the store full: they stay, and go once it has room (storeLoaded)
+    return false;
   }
+  forgetLoaded(id);
   StoredPoints stored;
   stored.positions.reserve(ids.size());
   stored.uvs.reserve(ids.size());
@@ -246,10 +251,13 @@ void MapReplica::loadPoints(KeyframeId id) {
     // The storage failed (counted by the store): the keyframe goes on without these points
     // until a snapshot sends them again. Cannot happen otherwise: the bytes are CRC-checked.
     points_lost_ += static_cast<int64_t>(stored.ids.size() - described.size());
-    store_->remove(id, KeyframeStore::Kind::kPoints);
+    store_->removeLater(id, KeyframeStore::Kind::kPoints);  // (a failed read removed it already)
   }
   if (described.empty()) described_.erase(id);
-  noteLoaded(id, bytes && points ? std::optional<uint32_t>(KeyframeStore::checksum(*bytes)) : std::nullopt);
+  Loaded entry{id};
+  if (bytes && points) entry = Loaded{id, true, KeyframeStore::checksum(*bytes), bytes->size()};
+  forgetLoaded(id);
+  loaded_.push_back(entry);
 }
 
 // Memory's list of a keyframe's points on storage, taken out of the index (the store's
@@ -303,13 +311,15 @@ bool MapReplica::moveStored(PointId id, const Vec3& p_w) {
   return true;
 }
 
-void MapReplica::noteLoaded(KeyframeId id, std::optional<uint32_t> checksum) {
+// Newest last; an entry there keeps what was read.
+void MapReplica::noteLoaded(KeyframeId id) {
   const auto it = std::find_if(loaded_.begin(), loaded_.end(), [id](const Loaded& e) { return e.id == id; });
+  Loaded entry{id};
   if (it != loaded_.end()) {
-    if (!checksum) checksum = it->checksum;
+    entry = *it;
     loaded_.erase(it);
   }
-  loaded_.push_back({id, checksum});  // the newest last
+  loaded_.push_back(entry);
 }
 
 void MapReplica::forgetLoaded(KeyframeId id) {
@@ -317,23 +327,29 @@ void MapReplica::forgetLoaded(KeyframeId id) {
                 loaded_.end());
 }
 
-// The cold keyframes read back (or given points while cold) go to the store, but for the
-// newest few while work is held back (kLoadedKeptForDeferred). Hot ones are remembered until
+// The cold keyframes read back (or given points while cold) go to the store, oldest first
+// and at most max_puts of them, but for the newest few while work is held back
+// (kLoadedKeptForDeferred), and none while the store is full. Hot ones are remembered until
 // they are frozen (a keyframe thawed and frozen again unsearched, as relocalisation does, is
 // not written again); culled ones are forgotten.
-void MapReplica::storeLoaded() {
-  if (loaded_.empty()) return;
+void MapReplica::storeLoaded(size_t max_puts) {
+  loaded_.erase(std::remove_if(loaded_.begin(), loaded_.end(), [&](const Loaded& e) { return !map_.hasKeyframe(e.id); }),
+                loaded_.end());
+  if (max_puts == 0 || !store_ || store_->full()) return;
+  const std::vector<KeyframeId> cold = coldLoaded();
+  const size_t keep = deferred_.empty() ? 0 : kLoadedKeptForDeferred;
+  for (size_t i = 0, puts = 0; i + keep < cold.size() && puts < max_puts && !store_->full(); ++i, ++puts) {
+    storePoints(cold[i]);  // (none left: forgotten; the store full: kept)
+  }
+}
+
+std::vector<KeyframeId> MapReplica::coldLoaded() const {
   std::vector<KeyframeId> cold;
   for (const Loaded& e : loaded_) {
     const Keyframe* keyframe = map_.keyframe(e.id);
     if (keyframe && keyframe->cold()) cold.push_back(e.id);
   }
-  loaded_.erase(std::remove_if(loaded_.begin(), loaded_.end(), [&](const Loaded& e) { return !map_.hasKeyframe(e.id); }),
-                loaded_.end());
-  const size_t keep = deferred_.empty() ? 0 : kLoadedKeptForDeferred;
-  for (size_t i = 0; i + keep < cold.size(); ++i) {
-    if (!storePoints(cold[i])) forgetLoaded(cold[i]);  // none left, or the store full: they stay
-  }
+  return cold;
 }
 
 // Slots for the points the keyframes describe (from the index), in point id order (the
@@ -586,7 +602,7 @@ bool MapReplica::apply(const MapUpdate& update, bool defer_cold) {
       removeKeyframe(id, /*store_later=*/defer_cold);
     }
   }
-  storeLoaded();
+  storeLoaded(defer_cold ? 0 : SIZE_MAX);  // held back: applyDeferred puts them back, a few a step
   return !unknown;
 }
 
@@ -616,14 +632,19 @@ size_t MapReplica::applyDeferred(size_t max_entries) {
   for (; more() && d.next_removed_point < d.removed_points.size(); ++d.next_removed_point, ++done) {
     removePoint(d.removed_points[d.next_removed_point]);
   }
+  storeLoaded(kPutBackPerStep);
   done += io_entries_ - io_before;
-  storeLoaded();
   if (d.empty()) d = Deferred{};  // its memory too
   if (store_ && done < max_entries) store_->releaseQueued((max_entries - done) / kStoreReleaseEntries + 1);
   return hasDeferred() ? 1 : 0;
 }
 
-bool MapReplica::hasDeferred() const { return !deferred_.empty() || (store_ && store_->queued() > 0); }
+// Work held back, holes to punch in the store, or keyframes read back to put back (while the
+// store has room).
+bool MapReplica::hasDeferred() const {
+  if (!deferred_.empty() || (store_ && store_->queued() > 0)) return true;
+  return store_ && !store_->full() && !coldLoaded().empty();
+}
 
 void MapReplica::putPointAndSlot(const MapPointData& p) {
   if (!stored_.empty() && !map_.point(p.id)) {

@@ -2020,6 +2020,7 @@ bool Tracker::hasDeferredMapWork() const { return impl_->replica().hasDeferred()
 const Map& Tracker::map() const { return impl_->map(); }
 size_t Tracker::numPoints() const { return impl_->replica().numPoints(); }
 size_t Tracker::pointsOnStorage() const { return impl_->replica().storedPoints(); }
+int64_t Tracker::pointsLostOnStorage() const { return impl_->replica().pointsLost(); }
 void Tracker::reset() { impl_->reset(); }
 void Tracker::load(const LoadedMap& loaded, bool add_keyframes) { impl_->load(loaded, add_keyframes); }
 const KeyframeStore* Tracker::keyframeStore() const { return impl_->keyframeStore(); }

@@ -43,10 +43,13 @@ class KeyframeStore {
   KeyframeStore(const KeyframeStore&) = delete;
   KeyframeStore& operator=(const KeyframeStore&) = delete;
 
-  // Replaces any entry of (id, kind) (a failed replace leaves none). False on a write error
-  // (storage full): nothing is stored, the caller keeps the bytes in memory, and later puts
-  // fail at once until an entry is removed (no write per frame against a full disk).
-  bool put(KeyframeId id, Kind kind, const std::vector<uint8_t>& bytes);
+  // Replaces any entry of (id, kind) once the new bytes are written (a failed replace leaves
+  // the old one; release_later: the old one's bytes are given back by releaseQueued(), as
+  // after removeLater). False on a write error (storage full): nothing is stored, the caller
+  // keeps the bytes in memory, and later puts fail at once until an entry is removed (no
+  // write per frame against a full disk; full()).
+  bool put(KeyframeId id, Kind kind, const std::vector<uint8_t>& bytes, bool release_later = false);
+  bool full() const { return full_; }
   bool has(KeyframeId id, Kind kind) const { return index_.count(key(id, kind)) > 0; }
   // The bytes as put; an error if there is no entry, the read fails or the bytes changed
   // (then the entry goes: the error is counted once, not on every later try).

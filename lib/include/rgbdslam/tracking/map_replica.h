@@ -34,8 +34,8 @@
 //   the count in view (forEachPosition) is the same. Its keyframe's points are read back
 //   when it is thawed, when a version puts a new point in it or takes one to another
 //   keyframe, or re-describes a point of it as it is culled; cold again, they go back at the
-//   end of the call (apply, applyDeferred, updateLocalMap; the newest 4 stay while work is
-//   held back), written only if their bytes changed. Why: over a 10-minute flight the
+//   end of the call (apply; with defer_cold 2 a step of applyDeferred instead, the newest 4
+//   staying while work is held back), written only if their bytes changed. Why: over a 10-minute flight the
 //   tracker's map grew from 7.6 to 42 thousand points, nearly all of cold keyframes
 //   (docs/open_work.md, sessions 40 and 41).
 // Memory: every keyframe's pose and small blurry image (compact: its image only, 4.8 kB at
@@ -191,8 +191,9 @@ class MapReplica {
   std::optional<StoredAt> findStored(PointId id);
   void removeStored(const StoredAt& at);
   bool moveStored(PointId id, const Vec3& p_w);  // false: not on storage
-  void noteLoaded(KeyframeId id, std::optional<uint32_t> checksum = std::nullopt);
-  void storeLoaded();
+  void noteLoaded(KeyframeId id);
+  void storeLoaded(size_t max_puts);
+  std::vector<KeyframeId> coldLoaded() const;
   void forgetLoaded(KeyframeId id);
 
   PinholeCamera camera_;
@@ -216,10 +217,12 @@ class MapReplica {
   std::unordered_map<KeyframeId, StoredPoints> stored_;
   std::unordered_map<KeyframeId, std::vector<KeyframeId>> stored_blocks_;  // block -> keyframes in stored_
   // Read back (or given points while cold) and not yet put back (storeLoaded), oldest first,
-  // with the checksum of the bytes read (none: write them).
+  // with the size and checksum of the bytes read (none read: write them).
   struct Loaded {
-    KeyframeId id;
-    std::optional<uint32_t> checksum;
+    KeyframeId id = -1;
+    bool read = false;
+    uint32_t checksum = 0;
+    size_t size = 0;
   };
   std::vector<Loaded> loaded_;
   size_t stored_points_ = 0;

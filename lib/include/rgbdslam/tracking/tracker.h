@@ -391,6 +391,7 @@ class Tracker {
   // keyframe store), and those on storage.
   size_t numPoints() const;
   size_t pointsOnStorage() const;
+  int64_t pointsLostOnStorage() const;  // read back from a store that failed (its errors)
   void reset();  // forget the map; the next frame initialises a new one
   // The store of cold keyframes (TrackerOptions::local_map.store_dir), nullptr when there is
   // none; its status says why when one was asked for and could not be made (the processes
