@@ -306,9 +306,13 @@ bool MapReplica::moveStored(PointId id, const Vec3& p_w) {
   if (stored_.empty()) return false;
   const std::optional<StoredAt> at = findStored(id);
   if (!at) return false;
-  at->points->positions[at->index] = p_w;
-  growBounds(at->keyframe, p_w);
+  moveStored(*at, p_w);
   return true;
+}
+
+void MapReplica::moveStored(const StoredAt& at, const Vec3& p_w) {
+  at.points->positions[at.index] = p_w;
+  growBounds(at.keyframe, p_w);
 }
 
 // Newest last; an entry there keeps what was read.
@@ -643,7 +647,11 @@ size_t MapReplica::applyDeferred(size_t max_entries) {
 // store has room).
 bool MapReplica::hasDeferred() const {
   if (!deferred_.empty() || (store_ && store_->queued() > 0)) return true;
-  return store_ && !store_->full() && !coldLoaded().empty();
+  // (no list made: rgbd-tracker asks at every turn of its loop)
+  return store_ && !store_->full() && std::any_of(loaded_.begin(), loaded_.end(), [this](const Loaded& e) {
+           const Keyframe* keyframe = map_.keyframe(e.id);
+           return keyframe && keyframe->cold();
+         });
 }
 
 void MapReplica::putPointAndSlot(const MapPointData& p) {
@@ -653,8 +661,7 @@ void MapReplica::putPointAndSlot(const MapPointData& p) {
     const std::optional<StoredAt> at = findStored(p.id);
     if (at && at->keyframe == p.source_keyframe && at->points->levels[at->index] == p.level &&
         at->points->uvs[at->index][0] == p.uv.x() && at->points->uvs[at->index][1] == p.uv.y()) {
-      at->points->positions[at->index] = p.p_w;
-      growBounds(at->keyframe, p.p_w);
+      moveStored(*at, p.p_w);
       return;
     }
   }

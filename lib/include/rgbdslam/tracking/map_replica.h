@@ -191,6 +191,7 @@ class MapReplica {
   std::optional<StoredAt> findStored(PointId id);
   void removeStored(const StoredAt& at);
   bool moveStored(PointId id, const Vec3& p_w);  // false: not on storage
+  void moveStored(const StoredAt& at, const Vec3& p_w);
   void noteLoaded(KeyframeId id);
   void storeLoaded(size_t max_puts);
   std::vector<KeyframeId> coldLoaded() const;
