@@ -16,8 +16,8 @@ void KeyframeBuildOptions::bind(OptionRegistry* r, const std::string& s) {
 std::optional<double> Keyframe::depthAt(const Eigen::Vector2d& uv) const {
   if (depth.empty()) return std::nullopt;
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-  if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) return std::nullopt;
-  const float d = depth.at<float>(v, u);
+  if (u < 0 || v < 0 || u >= depth.cols() || v >= depth.rows()) return std::nullopt;
+  const float d = depth.at(u, v);
   if (!std::isfinite(d)) return std::nullopt;
   return d;
 }
@@ -31,15 +31,11 @@ void Keyframe::releaseMappingData() {
 cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m) {
   if (raw.empty()) return cv::Mat();
   cv::Mat out(raw.size(), CV_32FC1);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
   const double inv = 1.0 / depth_scale;
   for (int v = 0; v < raw.rows; ++v) {
     const uint16_t* in = raw.ptr<uint16_t>(v);
     float* o = out.ptr<float>(v);
-    for (int u = 0; u < raw.cols; ++u) {
-      const double d = in[u] * inv;
-      o[u] = (in[u] != 0 && d >= min_m && d <= max_m) ? static_cast<float>(d) : nan;
-    }
+    for (int u = 0; u < raw.cols; ++u) o[u] = rawDepthToMetres(in[u], inv, min_m, max_m);
   }
   return out;
 }
@@ -49,7 +45,7 @@ std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeB
   keyframe->id = data.id;
   keyframe->utime = data.utime;
   keyframe->T_w_c = data.T_w_c;
-  keyframe->depth = depthToMetres(data.depth, data.depth_scale, options.min_depth_m, options.max_depth_m);
+  keyframe->depth = KeyframeDepth(data.depth, data.depth_scale, options.min_depth_m, options.max_depth_m);
   buildPyramid(data.grey, kMaxLevels, &keyframe->pyramid);
   detectPyramidCorners(keyframe->pyramid, options.corners, /*with_maxima=*/true, &keyframe->corners);
   keyframe->sbi = makeSmallBlurryImage(keyframe->pyramid);

@@ -208,7 +208,7 @@ Status writeSavedKeyframe(MapFileWriter* w, const Keyframe& kf, const PinholeCam
   w->u8(kf.depth.empty() ? 0 : 1);
   if (!kf.depth.empty()) {
     w->f64(camera.depth_factor);
-    w->blob(compressDepth(metricDepthToRaw(kf.depth, camera.depth_factor)));
+    w->blob(compressDepth(metricDepthToRaw(kf.depth.metres(), camera.depth_factor)));
   }
   // Id order, so that equal maps give equal files.
   std::map<PointId, Measurement> sorted(kf.measurements().begin(), kf.measurements().end());

@@ -90,7 +90,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
   const auto start = LoopClock::now();
   FeatureRelocaliserOptions extract;
   extract.features = options_.features;
-  Features3d features = extractFeatures3d(kf->grey(), kf->depth, camera_, extract);
+  Features3d features = extractFeatures3d(kf->grey(), kf->depth.metres(), camera_, extract);
   const bool due = close && static_cast<int>(map->numKeyframes()) > options_.min_keyframe_gap;
   if (!places_ && !due) {
     pending_.push_back(Pending{id, kf->T_w_c, std::move(features)});

@@ -67,16 +67,16 @@ class SeparationGrid {
 // In dense depth a missing neighbour marks an edge or a hole (occlusion shadow, glass), so
 // it rejects the corner ('require_all'); in sparse depth readings are missing everywhere
 // and carry no such meaning, so missing neighbours are ignored.
-std::optional<double> stableDepth(const cv::Mat& depth, const Eigen::Vector2d& uv, double max_spread,
+std::optional<double> stableDepth(const KeyframeDepth& depth, const Eigen::Vector2d& uv, double max_spread,
                                   bool require_all) {
   const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-  if (u < 1 || v < 1 || u >= depth.cols - 1 || v >= depth.rows - 1) return std::nullopt;
-  const float centre = depth.at<float>(v, u);
+  if (u < 1 || v < 1 || u >= depth.cols() - 1 || v >= depth.rows() - 1) return std::nullopt;
+  const float centre = depth.at(u, v);
   if (!std::isfinite(centre)) return std::nullopt;
   float lo = centre, hi = centre;
   for (int dv = -1; dv <= 1; ++dv) {
     for (int du = -1; du <= 1; ++du) {
-      const float d = depth.at<float>(v + dv, u + du);
+      const float d = depth.at(u + du, v + dv);
       if (!std::isfinite(d)) {
         if (require_all) return std::nullopt;
         continue;
@@ -89,13 +89,13 @@ std::optional<double> stableDepth(const cv::Mat& depth, const Eigen::Vector2d& u
   return centre;
 }
 
-double validFraction(const cv::Mat& depth) {
+double validFraction(const KeyframeDepth& depth) {
   int valid = 0;
-  for (int v = 0; v < depth.rows; ++v) {
-    const float* row = depth.ptr<float>(v);
-    for (int u = 0; u < depth.cols; ++u) valid += std::isfinite(row[u]) ? 1 : 0;
+  for (int v = 0; v < depth.rows(); ++v) {
+    for (int u = 0; u < depth.cols(); ++u) valid += std::isfinite(depth.at(u, v)) ? 1 : 0;
   }
-  return depth.total() ? static_cast<double>(valid) / depth.total() : 0.0;
+  const double total = static_cast<double>(depth.cols()) * depth.rows();
+  return total > 0 ? valid / total : 0.0;
 }
 
 struct Candidate {

@@ -1434,8 +1434,9 @@ void Tracker::Impl::rememberKeyframe(const Keyframe& keyframe) {
       [depth = keyframe.depth, grey = keyframe.grey(), camera = camera_, noise = options_.pose.noise,
        align = options_.depth_align, features = options_.reloc_features, ready = vocabulary_ready_] {
         KeyframeExtras extras;
-        if (align.enabled) extras.surface = sampleSurface(depth, camera, noise, align);
-        if (features.enabled) extras.features = extractFeatures3d(grey, depth, camera, features);
+        const cv::Mat metres = depth.metres();
+        if (align.enabled) extras.surface = sampleSurface(metres, camera, noise, align);
+        if (features.enabled) extras.features = extractFeatures3d(grey, metres, camera, features);
         if (features.enabled && ready->load()) extras.bag = projectVocabulary().bag(extras.features.descriptors);
         return extras;
       });

@@ -21,6 +21,7 @@
 #include "rgbdslam/image/pyramid.h"
 #include "rgbdslam/image/small_blurry_image.h"
 #include "rgbdslam/map/depth_record.h"
+#include "rgbdslam/map/keyframe_depth.h"
 #include "rgbdslam/map/map_types.h"
 #include "rgbdslam/util/option_registry.h"
 
@@ -33,7 +34,7 @@ struct Keyframe {
   KeyframeId id = -1;
   int64_t utime = 0;        // acquisition time [us]
   SE3 T_w_c;
-  cv::Mat depth;            // CV_32FC1 [m], NaN where there is no reading, or empty
+  KeyframeDepth depth;      // raw readings, read in metres (keyframe_depth.h), or empty
   ImagePyramid pyramid;     // grey, kMaxLevels levels
   std::vector<LevelCorners> corners;  // FAST corners per level
   SmallBlurryImage sbi;     // for relocalisation
@@ -52,8 +53,8 @@ struct Keyframe {
 
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }
-  // Frees what only the mapper reads after the keyframe's points are made (the metric depth,
-  // 4 bytes a pixel, the corners and the measurements): the tracker's replica keeps the
+  // Frees what only the mapper reads after the keyframe's points are made (the depth, 2 bytes
+  // a pixel, the corners and the measurements): the tracker's replica keeps the
   // pyramid (the points' patches) and the small blurry image (relocalisation). Call it
   // before the keyframe joins a Map (the Map indexes the measurements when it is added).
   void releaseMappingData();
@@ -96,7 +97,7 @@ struct KeyframeBuildOptions {
   void bind(OptionRegistry* registry, const std::string& section);  // the depth range
 };
 
-// Builds pyramid, corners, SBI and metric depth from a keyframe message's content, with its
+// Builds pyramid, corners, SBI and depth (keyframe_depth.h) from a keyframe message's content, with its
 // measurements (the Map indexes them when the keyframe is added).
 std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeBuildOptions& options);
 // Converts raw depth to metres with NaN for invalid readings (0, out of range).

@@ -22,7 +22,7 @@
 // every value (finite, unit quaternion, ids increasing, levels, pixels in the image, each
 // measurement's point and each point's source keyframe present), and the images decode to
 // the camera's size. Any failure is an error naming the file and the byte; no input crashes.
-// Depth is stored in the camera's raw units: a keyframe's metric depth (NaN = none)
+// Depth is stored in the camera's raw units: a keyframe's depth in metres (NaN = none)
 // converts back to the raw readings it came from exactly (the mapper keeps readings inside
 // the keyframe depth range only: the others were invalid already).
 // Saving writes PATH.tmp-PID, syncs it and renames it over PATH: a crash mid-save leaves the

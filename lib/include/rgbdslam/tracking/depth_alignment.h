@@ -87,7 +87,7 @@ struct SurfaceSample {
   float normal_var = 0.f;                       // variance of n's tilt [rad^2]
 };
 
-// Samples of a metric depth image (CV_32FC1, NaN where there is no reading; Keyframe::depth).
+// Samples of a metric depth image (CV_32FC1, NaN where there is no reading; KeyframeDepth::metres()).
 std::vector<SurfaceSample> sampleSurface(const cv::Mat& depth_m, const PinholeCamera& camera,
                                          const NoiseModel& noise, const DepthAlignmentOptions& options);
 
