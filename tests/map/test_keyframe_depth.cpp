@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 
 #include "rgbdslam/map/map.h"
@@ -13,15 +15,27 @@ namespace {
 constexpr double kDepthScale = 5000.0;        // raw units per metre (TUM)
 constexpr double kMinM = 0.3, kMaxM = 8.0;  // the keyframe build's defaults
 
-// Raw depth with every kind of reading: none (0), nearer than the range, in it, beyond it.
+// Raw depth with every kind of reading: none (0), nearer than the range, in it, beyond it,
+// and the readings at the range's ends and the largest.
 cv::Mat randomRawDepth(int rows, int cols, uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> units(0, 50000);  // 0-10 m
+  constexpr uint16_t kEnds[] = {1, 1499, 1500, 1501, 39999, 40000, 40001, 65535};  // 0.3 m = 1500, 8 m = 40000
   cv::Mat raw(rows, cols, CV_16UC1);
   for (int v = 0; v < rows; ++v) {
-    for (int u = 0; u < cols; ++u) raw.at<uint16_t>(v, u) = (u * 7 + v) % 13 == 0 ? 0 : static_cast<uint16_t>(units(rng));
+    for (int u = 0; u < cols; ++u) {
+      const int kind = (u * 7 + v) % 13;
+      raw.at<uint16_t>(v, u) = kind == 0 ? 0 : kind == 1 ? kEnds[(u + v) % 8] : static_cast<uint16_t>(units(rng));
+    }
   }
   return raw;
+}
+
+// The map's metres as the float image held them before KeyframeDepth, written out here
+// (not through rawDepthToMetres, which KeyframeDepth and depthToMetres share).
+float metresAsBefore(uint16_t units) {
+  const double d = units * (1.0 / kDepthScale);
+  return units != 0 && d >= kMinM && d <= kMaxM ? static_cast<float>(d) : std::numeric_limits<float>::quiet_NaN();
 }
 
 // 'sparse' repeated over step x step blocks, cut to rows x cols, as the link's subsampled
@@ -34,21 +48,24 @@ cv::Mat expandedDepth(const cv::Mat& sparse, int step, int rows, int cols) {
   return out;
 }
 
-// Bit for bit (NaN equals NaN), against the float image the map kept before.
+// Bit for bit (NaN equals NaN), against the float image the map kept before; and the
+// share of valid readings as point creation counted it over that image.
 void expectSameMetres(const KeyframeDepth& depth, const cv::Mat& raw) {
-  const cv::Mat want = depthToMetres(raw, kDepthScale, kMinM, kMaxM);
   const cv::Mat got = depth.metres();
-  ASSERT_EQ(got.size(), want.size());
+  ASSERT_EQ(got.size(), raw.size());
   ASSERT_EQ(got.type(), CV_32FC1);
-  EXPECT_EQ(std::memcmp(got.data, want.data, want.total() * sizeof(float)), 0);
-  int differ = 0;
+  int differ = 0, valid = 0;
   for (int v = 0; v < raw.rows; ++v) {
     for (int u = 0; u < raw.cols; ++u) {
-      const float a = depth.at(u, v), b = want.at<float>(v, u);
-      differ += std::memcmp(&a, &b, sizeof(float)) != 0 ? 1 : 0;
+      const float want = metresAsBefore(raw.at<uint16_t>(v, u)), a = depth.at(u, v), b = got.at<float>(v, u);
+      differ += std::memcmp(&a, &want, sizeof(float)) != 0 || std::memcmp(&b, &want, sizeof(float)) != 0 ? 1 : 0;
+      valid += std::isfinite(want) ? 1 : 0;
     }
   }
   EXPECT_EQ(differ, 0);
+  EXPECT_EQ(depth.validFraction(), static_cast<double>(valid) / raw.total());
+  const cv::Mat shared = depthToMetres(raw, kDepthScale, kMinM, kMaxM);
+  EXPECT_EQ(std::memcmp(got.data, shared.data, shared.total() * sizeof(float)), 0);
 }
 
 TEST(KeyframeDepth, ASensorsDepthIsKeptAtEveryPixelAndReadsAsBefore) {
@@ -76,12 +93,21 @@ TEST(KeyframeDepth, DepthDecodedFromEveryStepthPixelIsKeptAtThatStep) {
 }
 
 TEST(KeyframeDepth, OneReadingOffItsBlockKeepsEveryPixel) {
-  const cv::Mat sparse = randomRawDepth(120, 160, 3);
-  cv::Mat raw = expandedDepth(sparse, 4, 480, 640);
-  raw.at<uint16_t>(101, 203) = static_cast<uint16_t>(raw.at<uint16_t>(101, 203) + 1);
-  const KeyframeDepth depth(raw, kDepthScale, kMinM, kMaxM);
-  EXPECT_EQ(depth.step(), 1);
-  expectSameMetres(depth, raw);
+  // Anywhere in a block, in a block's first row, and in the last blocks, cut by the border.
+  for (const int step : {2, 4, 8}) {
+    const int rows = 483, cols = 645;
+    const cv::Mat sparse = randomRawDepth((rows + step - 1) / step, (cols + step - 1) / step, 3);
+    for (const cv::Point at : {cv::Point(203, 101), cv::Point(step * 10 + 1, step * 7), cv::Point(cols - 1, 5),
+                               cv::Point(9, rows - 1)}) {
+      if (at.x % step == 0 && at.y % step == 0) continue;  // a block's own reading
+      SCOPED_TRACE("step " + std::to_string(step) + " at " + std::to_string(at.x) + "," + std::to_string(at.y));
+      cv::Mat raw = expandedDepth(sparse, step, rows, cols);
+      raw.at<uint16_t>(at) = static_cast<uint16_t>(raw.at<uint16_t>(at) + 1);
+      const KeyframeDepth depth(raw, kDepthScale, kMinM, kMaxM);
+      EXPECT_LT(depth.step(), step);
+      expectSameMetres(depth, raw);
+    }
+  }
   // A block of 2 that holds, inside blocks of 4 that do not: kept at 2.
   const cv::Mat fine = expandedDepth(randomRawDepth(240, 320, 4), 2, 480, 640);
   EXPECT_EQ(KeyframeDepth(fine, kDepthScale, kMinM, kMaxM).step(), 2);
@@ -104,7 +130,9 @@ TEST(KeyframeDepth, AKeyframeReadsItsDepthThroughIt) {
       const std::optional<double> d = keyframe->depthAt(Eigen::Vector2d(u + 0.3, v - 0.2));
       const float w = want.at<float>(v, u);
       ASSERT_EQ(d.has_value(), std::isfinite(w)) << u << "," << v;
-      if (d) EXPECT_EQ(*d, static_cast<double>(w));
+      if (d) {
+        EXPECT_EQ(*d, static_cast<double>(w));
+      }
       ++checked;
     }
   }

@@ -1,5 +1,7 @@
 #include "rgbdslam/map/keyframe_depth.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace rgbdslam {
@@ -31,9 +33,10 @@ KeyframeDepth::KeyframeDepth(const cv::Mat& raw, double depth_scale, double min_
     return;
   }
   CV_Assert(raw.type() == CV_16UC1);
-  for (const int step : {8, 4, 2}) {
+  for (const int shift : {3, 2, 1}) {
+    const int step = 1 << shift;
     if (raw.cols < step || raw.rows < step || !blockConstant(raw, step)) continue;
-    step_ = step;
+    shift_ = shift;
     raw_.create((raw.rows + step - 1) / step, (raw.cols + step - 1) / step, CV_16UC1);
     for (int v = 0; v < raw_.rows; ++v) {
       const uint16_t* in = raw.ptr<uint16_t>(v * step);
@@ -43,6 +46,23 @@ KeyframeDepth::KeyframeDepth(const cv::Mat& raw, double depth_scale, double min_
     return;
   }
   raw_ = raw;
+}
+
+// Each stored reading counts for its block's pixels, the last row and column of blocks
+// clipped at the image's border.
+double KeyframeDepth::validFraction() const {
+  if (empty()) return 0.0;
+  const int step = 1 << shift_;
+  int64_t valid = 0;
+  for (int v = 0; v < raw_.rows; ++v) {
+    const int block_rows = std::min(step, rows_ - v * step);
+    const uint16_t* in = raw_.ptr<uint16_t>(v);
+    for (int u = 0; u < raw_.cols; ++u) {
+      if (std::isnan(rawDepthToMetres(in[u], inv_scale_, min_m_, max_m_))) continue;
+      valid += static_cast<int64_t>(block_rows) * std::min(step, cols_ - u * step);
+    }
+  }
+  return static_cast<double>(valid) / (static_cast<double>(cols_) * rows_);
 }
 
 cv::Mat KeyframeDepth::metres() const {

@@ -184,8 +184,8 @@ SE3 readSavedPose(MapFileReader* r) {
   return r->ok() ? SE3(quaternion, t) : SE3();
 }
 
-// The keyframe's metric depth (NaN = none) back in raw units: exact for readings that came
-// from raw units at this scale (float holds raw / scale to far better than half a unit).
+// The keyframe's depth in metres (KeyframeDepth::metres(), NaN = none) back in raw units:
+// exact for readings that came from raw units at this scale (float holds raw / scale to far better than half a unit).
 cv::Mat metricDepthToRaw(const cv::Mat& metres, double scale) {
   cv::Mat raw(metres.size(), CV_16UC1);
   for (int v = 0; v < metres.rows; ++v) {

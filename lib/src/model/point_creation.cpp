@@ -89,15 +89,6 @@ std::optional<double> stableDepth(const KeyframeDepth& depth, const Eigen::Vecto
   return centre;
 }
 
-double validFraction(const KeyframeDepth& depth) {
-  int valid = 0;
-  for (int v = 0; v < depth.rows(); ++v) {
-    for (int u = 0; u < depth.cols(); ++u) valid += std::isfinite(depth.at(u, v)) ? 1 : 0;
-  }
-  const double total = static_cast<double>(depth.cols()) * depth.rows();
-  return total > 0 ? valid / total : 0.0;
-}
-
 struct Candidate {
   float score;
   cv::Point2i corner;
@@ -150,7 +141,7 @@ std::vector<NewPoint> createPointsFromDepth(const Keyframe& keyframe, const Pinh
   if (keyframe.depth.empty()) return created;
   SeparationGrid grid(camera.width, camera.height, options.min_separation_px);
   for (const auto& [point_id, m] : keyframe.measurements()) grid.occupy(m.uv);
-  const bool dense = validFraction(keyframe.depth) >= options.dense_depth_fraction;
+  const bool dense = keyframe.depth.validFraction() >= options.dense_depth_fraction;
   const size_t levels = keyframe.corners.size();
   addPointsFromDepth(keyframe, camera, options, std::vector<double>(levels, options.min_shi_tomasi),
                      SIZE_MAX, first_id, dense, &grid, &created);

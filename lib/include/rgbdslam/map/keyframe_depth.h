@@ -13,7 +13,11 @@
 // by repeating each reading over its step x step block; such an image is stored at the
 // coarsest of those steps at which every block holds one value, which loses nothing (a
 // quarter-step 640x480 depth: 38 kB instead of 1.23 MB). A sensor's full depth has no such
-// blocks and stays at every pixel.
+// blocks and stays at every pixel (unless it has no reading at all, as behind a covered
+// lens: that is kept at the coarsest step, losslessly too).
+//
+// The raw image must not be written after a KeyframeDepth is made from it: kept at every
+// pixel, it shares the buffer (the tracker and the mapper give it images of their own).
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -40,20 +44,22 @@ class KeyframeDepth {
   bool empty() const { return raw_.empty(); }
   int cols() const { return cols_; }
   int rows() const { return rows_; }
-  int step() const { return step_; }  // pixels per stored reading along each axis (1, 2, 4, 8)
+  int step() const { return 1 << shift_; }  // pixels per stored reading along each axis (1, 2, 4, 8)
   size_t bytes() const { return raw_.total() * raw_.elemSize(); }
 
   // Depth [m] at pixel (u, v), inside the image; NaN where there is no valid reading.
   float at(int u, int v) const {
-    return rawDepthToMetres(raw_.ptr<uint16_t>(v / step_)[u / step_], inv_scale_, min_m_, max_m_);
+    return rawDepthToMetres(raw_.ptr<uint16_t>(v >> shift_)[u >> shift_], inv_scale_, min_m_, max_m_);
   }
   // The whole image as CV_32FC1 metres, NaN where there is no reading (empty if empty()).
   cv::Mat metres() const;
+  // The share of the image's pixels with a valid reading (0 if empty()).
+  double validFraction() const;
   void release() { *this = KeyframeDepth(); }
 
  private:
-  cv::Mat raw_;  // CV_16UC1, one reading per step_ x step_ block
-  int step_ = 1;
+  cv::Mat raw_;  // CV_16UC1, one reading per step x step block
+  int shift_ = 0;  // log2 of the step
   int cols_ = 0, rows_ = 0;
   double inv_scale_ = 0.0;  // metres per raw unit
   double min_m_ = 0.0, max_m_ = 0.0;

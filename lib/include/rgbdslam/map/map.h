@@ -54,7 +54,7 @@ struct Keyframe {
   SE3 T_c_w() const { return T_w_c.inverse(); }
   const cv::Mat& grey() const { return pyramid.levels[0]; }
   // Frees what only the mapper reads after the keyframe's points are made (the depth, 2 bytes
-  // a pixel, the corners and the measurements): the tracker's replica keeps the
+  // a pixel or fewer, the corners and the measurements): the tracker's replica keeps the
   // pyramid (the points' patches) and the small blurry image (relocalisation). Call it
   // before the keyframe joins a Map (the Map indexes the measurements when it is added).
   void releaseMappingData();
@@ -98,7 +98,8 @@ struct KeyframeBuildOptions {
 };
 
 // Builds pyramid, corners, SBI and depth (keyframe_depth.h) from a keyframe message's content, with its
-// measurements (the Map indexes them when the keyframe is added).
+// measurements (the Map indexes them when the keyframe is added). data.depth must not be
+// written afterwards: the keyframe's depth may share its buffer.
 std::unique_ptr<Keyframe> makeKeyframe(const KeyframeData& data, const KeyframeBuildOptions& options);
 // Converts raw depth to metres with NaN for invalid readings (0, out of range).
 cv::Mat depthToMetres(const cv::Mat& raw, double depth_scale, double min_m, double max_m);
