@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -139,6 +140,94 @@ TEST(Codec, PngRoundTripIsExact) {
   EXPECT_EQ(cv::norm(grey, *back, cv::NORM_INF), 0.0);
 }
 
+
+// A textured 640x480 image, as a camera's: noise blurred to the scale of corners.
+cv::Mat codecTestImage(int type, uint64_t seed) {
+  cv::Mat image(480, 640, type);
+  cv::RNG rng(seed);
+  rng.fill(image, cv::RNG::UNIFORM, 0, CV_MAT_DEPTH(type) == CV_16U ? 40000 : 256);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 1.5);
+  return image;
+}
+
+// Each way of reading an image, and imgcodecs' flag for the same.
+const std::pair<ImageRead, int> kCodecReads[] = {
+    {ImageRead::kGrey, cv::IMREAD_GRAYSCALE}, {ImageRead::kColour, cv::IMREAD_COLOR}, {ImageRead::kAsStored, cv::IMREAD_UNCHANGED}};
+
+// The codec went from OpenCV's imgcodecs to libjpeg-turbo and libpng with imgcodecs'
+// settings: the same JPEG bytes, and every image decodes to the same pixels either way (a
+// cold keyframe's JPEG is decoded when it is thawed, so a pixel off would change tracks).
+TEST(Codec, JpegAndPngAgreeWithOpenCvsImgcodecs) {
+  for (const int type : {CV_8UC1, CV_8UC3}) {
+    const cv::Mat image = codecTestImage(type, 11 + type);
+    for (const int quality : {30, 75, 95}) {
+      for (const bool optimal : {false, true}) {
+        SCOPED_TRACE("type " + std::to_string(type) + ", quality " + std::to_string(quality) +
+                     (optimal ? ", optimal Huffman" : ""));
+        const std::vector<uint8_t> ours = encodeJpeg(image, quality, optimal);
+        std::vector<uint8_t> theirs;
+        ASSERT_TRUE(cv::imencode(".jpg", image, theirs,
+                                 {cv::IMWRITE_JPEG_QUALITY, quality, cv::IMWRITE_JPEG_OPTIMIZE, optimal ? 1 : 0}));
+        EXPECT_EQ(ours, theirs);
+        for (const auto& [read, flag] : kCodecReads) {
+          const auto decoded = decodeImage(ours.data(), ours.size(), read, image.size());
+          ASSERT_TRUE(decoded) << decoded.error();
+          const cv::Mat want = cv::imdecode(ours, flag);
+          ASSERT_EQ(decoded->type(), want.type());
+          EXPECT_EQ(cv::norm(*decoded, want, cv::NORM_INF), 0.0);
+        }
+      }
+    }
+  }
+  // PNG: grey and BGR at 8 bits, depth at 16 (TUM's files), each read as imgcodecs reads it.
+  for (const int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1}) {
+    SCOPED_TRACE("PNG type " + std::to_string(type));
+    const cv::Mat image = codecTestImage(type, 31 + type);
+    const std::vector<uint8_t> ours = encodePng(image);
+    const cv::Mat theirs = cv::imdecode(ours, cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(theirs.type(), type);
+    EXPECT_EQ(cv::norm(theirs, image, cv::NORM_INF), 0.0);  // a standard PNG, lossless
+    std::vector<uint8_t> png;
+    ASSERT_TRUE(cv::imencode(".png", image, png));
+    for (const auto& [read, flag] : kCodecReads) {
+      const auto decoded = decodeImage(png.data(), png.size(), read, image.size());
+      ASSERT_TRUE(decoded) << decoded.error();
+      const cv::Mat want = cv::imdecode(png, flag);
+      ASSERT_EQ(decoded->type(), want.type()) << static_cast<int>(read);
+      // Colour to grey: libpng's luma in fixed point, OpenCV's the same weights: at most 1 apart.
+      const bool luma = read == ImageRead::kGrey && image.channels() > 1;
+      EXPECT_LE(cv::norm(*decoded, want, cv::NORM_INF), luma ? 1.0 : 0.0) << static_cast<int>(read);
+    }
+  }
+}
+
+// Bad input gets an error, not a partly grey image: cut anywhere, or a byte of the
+// compressed data changed (the last rows of a truncated JPEG were grey with imgcodecs).
+TEST(Codec, CutOrCorruptJpegAndPngAreErrors) {
+  const cv::Mat image = codecTestImage(CV_8UC1, 5);
+  for (const auto& bytes : {encodeJpeg(image, 75), encodePng(image)}) {
+    for (const double keep : {0.05, 0.5, 0.9, 0.999}) {
+      const size_t cut = static_cast<size_t>(keep * bytes.size());
+      const auto refused = decodeImage(bytes.data(), cut, ImageRead::kGrey, image.size());
+      EXPECT_FALSE(refused) << "kept " << cut << " of " << bytes.size();
+    }
+  }
+  std::vector<uint8_t> png = encodePng(image);
+  png[png.size() / 2] ^= 0x55;  // inside the image data: its CRC no longer holds
+  const auto refused = decodeImage(png.data(), png.size(), ImageRead::kGrey, image.size());
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.error().find("corrupt PNG"), std::string::npos) << refused.error();
+}
+
+// A file of synth-write or a plot: written whole, read back the same.
+TEST(Codec, APngFileReadsBackTheSame) {
+  const cv::Mat depth = codecTestImage(CV_16UC1, 9);
+  const std::string path = ::testing::TempDir() + "codec_depth.png";
+  ASSERT_TRUE(writePngFile(path, depth));
+  EXPECT_EQ(cv::norm(cv::imread(path, cv::IMREAD_UNCHANGED), depth, cv::NORM_INF), 0.0);
+  std::remove(path.c_str());
+  EXPECT_FALSE(writePngFile("/nonexistent-directory/x.png", depth));
+}
 
 // The offset of a JPEG's frame header (SOFn) marker, found by the same walk a decoder does.
 size_t jpegFrameHeader(const std::vector<uint8_t>& jpeg) {

@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <numeric>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "rgbdslam/eval/trajectory_eval.h"
+#include "rgbdslam/image/codec.h"
 
 namespace rgbdslam {
 namespace {
@@ -265,11 +265,7 @@ Status writeTrajectoryPlot(const std::string& png_path, const Trajectory& ground
   putText(image, title, cv::Point(kMarginLeftTop, 25));
   drawLegend(image, cv::Point(kMarginLeftTop + 10, kImageHeight - 30),
              similarity ? "estimate (similarity-aligned)" : "estimate (rigidly aligned)");
-  try {
-    if (!cv::imwrite(png_path, image)) return Error{png_path + ": cannot write plot"};
-  } catch (const cv::Exception& e) {
-    return Error{png_path + ": cannot write plot: " + e.what()};
-  }
+  if (Status written = writePngFile(png_path, image); !written) return Error{"cannot write plot: " + written.error()};
   return {};
 }
 

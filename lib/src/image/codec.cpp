@@ -6,22 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 
 namespace rgbdslam {
-
-std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_huffman) {
-  std::vector<uint8_t> out;
-  cv::imencode(".jpg", image, out, {cv::IMWRITE_JPEG_QUALITY, quality, cv::IMWRITE_JPEG_OPTIMIZE, optimal_huffman ? 1 : 0});
-  return out;
-}
-
-std::vector<uint8_t> encodePng(const cv::Mat& image) {
-  std::vector<uint8_t> out;
-  cv::imencode(".png", image, out, {cv::IMWRITE_PNG_COMPRESSION, 1});
-  return out;
-}
 
 namespace {
 
@@ -76,35 +63,6 @@ Expected<cv::Size> encodedImageSize(const uint8_t* data, size_t size) {
     return cv::Size(static_cast<int>(width), static_cast<int>(height));
   }
   return Error{"neither JPEG nor PNG (the only image encodings read)"};
-}
-
-Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, int imread_flags, cv::Size expected) {
-  if (size == 0) return Error{"empty compressed image"};
-  // The header first: a few bytes may declare a gigapixel image, which the decoder would
-  // allocate before anything else is checked.
-  const Expected<cv::Size> declared = encodedImageSize(data, size);
-  if (!declared) return Error{declared.error()};
-  if (*declared != expected) {
-    return Error{"image header says " + std::to_string(declared->width) + "x" + std::to_string(declared->height) +
-                 ", expected " + std::to_string(expected.width) + "x" + std::to_string(expected.height)};
-  }
-  cv::Mat image;
-  try {
-    const cv::Mat buffer(1, static_cast<int>(size), CV_8UC1, const_cast<uint8_t*>(data));
-    image = cv::imdecode(buffer, imread_flags);
-  } catch (const cv::Exception& e) {
-    return Error{"image does not decode: " + e.msg};
-  }
-  if (image.empty()) return Error{"image does not decode (corrupt or truncated)"};
-  if (image.size() != expected) {
-    return Error{"decoded image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) + ", expected " +
-                 std::to_string(expected.width) + "x" + std::to_string(expected.height)};
-  }
-  return image;
-}
-
-Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, int channels, int width, int height) {
-  return decodeImage(data, size, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR, cv::Size(width, height));
 }
 
 std::vector<uint8_t> compressDepth(const cv::Mat& depth, int level) {

@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
@@ -124,7 +123,7 @@ Expected<cv::Mat> readImage(const std::string& file, const PinholeCamera& camera
     return Error{file + ": image is " + std::to_string(size->width) + "x" + std::to_string(size->height) +
                  " but the camera file says " + std::to_string(camera.width) + "x" + std::to_string(camera.height)};
   }
-  Expected<cv::Mat> image = decodeImage(data.data(), data.size(), cv::IMREAD_UNCHANGED, *size);
+  Expected<cv::Mat> image = decodeImage(data.data(), data.size(), ImageRead::kAsStored, *size);
   if (!image) return Error{file + ": cannot decode (" + image.error() + ")"};
   return image;
 }

@@ -12,8 +12,8 @@
 #include <limits>
 #include <string>
 #include <tuple>
-#include <opencv2/imgcodecs.hpp>
 
+#include "rgbdslam/image/codec.h"
 #include "world.h"
 
 namespace rgbdslam {
@@ -268,15 +268,6 @@ std::string stampSeconds(int64_t utime) {
   std::snprintf(buffer, sizeof(buffer), "%lld.%06lld", static_cast<long long>(utime / 1000000),
                 static_cast<long long>(utime % 1000000));
   return buffer;
-}
-
-Status writeImage(const std::string& path, const cv::Mat& image) {
-  try {
-    if (cv::imwrite(path, image)) return {};
-  } catch (const cv::Exception& e) {
-    return Error{path + ": cannot write image (" + e.msg + ")"};
-  }
-  return Error{path + ": cannot write image"};
 }
 
 class SyntheticSource : public FrameSource {
@@ -633,8 +624,8 @@ Status SyntheticScene::writeTumDirectory(const std::string& dir) const {
     const RgbdFrame frame = render(i);
     const std::string stamp = stampSeconds(frame.utime);
     const std::string rgb_name = "rgb/" + stamp + ".png", depth_name = "depth/" + stamp + ".png";
-    if (Status s = writeImage(dir + "/" + rgb_name, frame.colour); !s) return s;
-    if (Status s = writeImage(dir + "/" + depth_name, frame.depth); !s) return s;
+    if (Status s = writePngFile(dir + "/" + rgb_name, frame.colour); !s) return s;
+    if (Status s = writePngFile(dir + "/" + depth_name, frame.depth); !s) return s;
     rgb_list << stamp << ' ' << rgb_name << '\n';
     depth_list << stamp << ' ' << depth_name << '\n';
   }

@@ -1,9 +1,12 @@
 #pragma once
-// Image encodings used on the wire and on disk: JPEG/PNG for 8-bit images, zlib (deflate)
-// for 16-bit depth, and for keyframe depth on the radio link quantised inverse depth with
-// zstd. Decoders validate sizes and report errors instead of crashing.
+// Image encodings used on the wire and on disk: JPEG/PNG for 8-bit images (and PNG for
+// 16-bit depth files), zlib (deflate) for 16-bit depth, and for keyframe depth on the radio
+// link quantised inverse depth with zstd. Decoders validate sizes and report errors instead
+// of crashing. JPEG and PNG go through libjpeg-turbo and libpng (codec_jpeg_png.cpp says
+// why not OpenCV's imgcodecs).
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "rgbdslam/util/expected.h"
@@ -20,15 +23,20 @@ constexpr uint32_t kMaxDecodedSide = 65535;  // [px], JPEG's own limit
 // at quality 75, 20 % / 12 % at quality 30, for +0.3-0.5 ms per image (0.4 -> 0.7-1.0 ms).
 // For what crosses the radio link; frames on the host's own network keep the faster pass.
 std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_huffman = false);
-// 8-bit image -> PNG bytes (lossless).
+// 8- or 16-bit grey, BGR or BGRA image -> PNG bytes (lossless; zlib level 1).
 std::vector<uint8_t> encodePng(const cv::Mat& image);
+// encodePng into a file (replaced if it exists).
+Status writePngFile(const std::string& path, const cv::Mat& image);
 // The size a JPEG or PNG stream declares in its header, read without decoding; an error for
 // any other encoding or a header that is cut off.
 Expected<cv::Size> encodedImageSize(const uint8_t* data, size_t size);
-// JPEG/PNG bytes -> image decoded with cv::imread flags, refused before decoding unless its
-// header declares the expected size (so a hostile header cannot make the decoder allocate
-// more than the expected image).
-Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, int imread_flags, cv::Size expected);
+// How an image is decoded: 8-bit grey (colour by Rec. 601 luma), 8-bit BGR, or as stored
+// (its bit depth; grey, BGR or BGRA).
+enum class ImageRead { kGrey, kColour, kAsStored };
+// JPEG/PNG bytes -> image, refused before decoding unless its header declares the expected
+// size (so a hostile header cannot make the decoder allocate more than the expected image).
+// A corrupt or truncated stream is an error, never a partly grey image.
+Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, ImageRead read, cv::Size expected);
 // JPEG/PNG bytes -> image with 'channels' (1 grey, 3 BGR), checked against the expected size.
 Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, int channels, int width,
                               int height);
