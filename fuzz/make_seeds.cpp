@@ -7,7 +7,10 @@
 #include <iterator>
 #include <stdexcept>
 
+#include <opencv2/imgproc.hpp>
+
 #include "common/map_journal.h"
+#include "rgbdslam/image/codec.h"
 #include "rgbdslam/map/map_file.h"
 #include "sample_messages.h"
 
@@ -116,6 +119,23 @@ void writeMapFile(const fs::path& out) {
   write(out / "fuzz_map_file", "one_keyframe", *bytes);
 }
 
+// JPEG and PNG images of each kind the suite reads, each read each way (the first byte).
+void writeImages(const fs::path& out) {
+  const RgbdFrame frame = test::sampleFrame();
+  cv::Mat grey;
+  cv::cvtColor(frame.colour, grey, cv::COLOR_BGR2GRAY);
+  const std::vector<std::pair<std::string, std::vector<uint8_t>>> images = {
+      {"grey_jpeg", encodeJpeg(grey, 75, true)}, {"colour_jpeg", encodeJpeg(frame.colour, 90)},
+      {"grey_png", encodePng(grey)}, {"colour_png", encodePng(frame.colour)}, {"depth_png", encodePng(frame.depth)}};
+  for (const auto& [name, bytes] : images) {
+    for (uint8_t read = 0; read < 3; ++read) {
+      std::vector<uint8_t> seed{read};
+      seed.insert(seed.end(), bytes.begin(), bytes.end());
+      write(out / "fuzz_image", name + "_" + std::to_string(read), seed);
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -128,6 +148,7 @@ int main(int argc, char** argv) {
     writeFiles(argv[1], argv[2]);
     writeJournalAndLog(argv[1]);
     writeMapFile(argv[1]);
+    writeImages(argv[1]);
   } catch (const std::exception& e) {
     std::cerr << "make-fuzz-seeds: " << e.what() << "\n";
     return 1;

@@ -29,6 +29,9 @@ Expected<cv::Size> jpegSize(const uint8_t* data, size_t size) {
       ++at;
       continue;
     }
+    // FF 00 is a stuffed zero, not a marker: a decoder skips it as stray data and reads on
+    // (a header walk that took it for a segment could be led past the frame header used).
+    if (marker == 0x00) return Error{"corrupt JPEG (no marker at byte " + std::to_string(at) + ")"};
     if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8)) {  // no length: TEM, RSTn, SOI
       at += 2;
       continue;

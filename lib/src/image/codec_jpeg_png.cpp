@@ -1,24 +1,32 @@
 // codec.h's JPEG and PNG coding, through libjpeg-turbo and libpng directly.
 //
 // Why not OpenCV's imgcodecs: Debian builds it with every image format it knows (GDAL,
-// GDCM, OpenEXR, ...), and linking it puts 150 libraries into a process: 38 MB of resident
-// memory before the program does anything (a program that only links it, measured against
-// one that does not; in rgbd-tracker most of its 57 MB of resident library pages). The
+// GDCM, poppler, ...), and linking it put 160 libraries into rgbd-tracker (47 without): 37
+// MiB of resident memory before the program does anything (a program that only links it,
+// measured against one that does not; most of rgbd-tracker's 57 MiB of library pages). The
 // suite uses two formats, and the onboard tracker's memory budget is 150 MB
 // (docs/open_work.md, session 42). The settings are OpenCV's own (jpeg_set_defaults,
 // baseline quality tables, optional optimised Huffman tables, islow DCT; PNG at zlib level
 // 1), so a JPEG's bytes and every decoded pixel are as before (tests/image/test_codec.cpp
 // compares them with imgcodecs).
 //
-// Both libraries report errors by longjmp to the call's setjmp. Everything written after
-// the setjmp lives in a heap-allocated state (an automatic variable changed between setjmp
-// and longjmp would be indeterminate), and no object with a destructor is left between the
-// two: the jumps cross only the libraries' C frames.
+// Both libraries report errors by longjmp to the call's setjmp, set before the first call
+// that may fail. Everything written after the setjmp lives in a heap-allocated state (an
+// automatic variable changed between setjmp and longjmp would be indeterminate), and no
+// object with a destructor is left between the two: the jumps cross only the libraries' C
+// frames, and the callbacks of ours they call let no exception out.
+//
+// Hostile input: the size is checked against the expected one before a pixel is allocated
+// (the header walk of codec.cpp first, then libjpeg's and libpng's own reading of it, which
+// a crafted stream can make differ), any libjpeg warning (corrupt data it would decode on
+// past) ends the decoding at once, and a JPEG of more than kMaxJpegScans scans (a
+// progressive stream can hold thousands, each a pass over the image) is refused.
 #include <algorithm>
 #include <csetjmp>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <new>
 #include <cstring>
 #include <fstream>
 #include <memory>
@@ -28,6 +36,7 @@
 
 // After <cstdio> and <cstddef>: jpeglib.h uses FILE and size_t without including them.
 #include <jpeglib.h>
+#include <jerror.h>  // after jpeglib.h: ERREXIT and the message codes
 #include <png.h>
 
 namespace rgbdslam {
@@ -35,11 +44,12 @@ namespace {
 
 // ---- JPEG ----
 
+constexpr int kMaxJpegScans = 100;  // a baseline JPEG has 1, libjpeg's progressive ones 6-10
+
 struct JpegErrors {
   jpeg_error_mgr manager;
   std::jmp_buf jump;
   char message[JMSG_LENGTH_MAX] = "";
-  int corrupt = 0;  // warnings: corrupt or truncated data libjpeg went on past
 };
 
 void jpegFail(j_common_ptr info) {
@@ -48,70 +58,125 @@ void jpegFail(j_common_ptr info) {
   std::longjmp(errors->jump, 1);
 }
 
-// libjpeg calls this with level -1 for a warning (it decodes on, filling what is missing
-// with grey); levels >= 0 are trace messages. A warning makes the image an error here.
+// libjpeg calls this with level -1 for a warning: corrupt or missing data it would decode on
+// past, making up what is missing. Here that ends the decoding. Levels >= 0 are traces.
 void jpegMessage(j_common_ptr info, int level) {
-  if (level >= 0) return;
-  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
-  if (errors->corrupt++ == 0) (*info->err->format_message)(info, errors->message);
+  if (level < 0) jpegFail(info);
 }
 
-JpegErrors* useErrors(JpegErrors* errors) {
+// Between the passes over a progressive stream's scans.
+void jpegProgress(j_common_ptr info) {
+  if (info->is_decompressor && reinterpret_cast<j_decompress_ptr>(info)->input_scan_number > kMaxJpegScans) {
+    std::snprintf(reinterpret_cast<JpegErrors*>(info->err)->message, JMSG_LENGTH_MAX, "more than %d scans",
+                  kMaxJpegScans);
+    std::longjmp(reinterpret_cast<JpegErrors*>(info->err)->jump, 1);
+  }
+}
+
+jpeg_error_mgr* useErrors(JpegErrors* errors) {
   jpeg_std_error(&errors->manager);
   errors->manager.error_exit = jpegFail;
   errors->manager.emit_message = jpegMessage;
-  return errors;
+  return &errors->manager;
 }
 
+// The encoder's output grows in a vector the state owns (jpeg_mem_dest's buffer is freed and
+// replaced as it grows, and a failure half way would leave the state holding a freed one).
 struct JpegEncoding {
   jpeg_compress_struct info;
   JpegErrors errors;
-  unsigned char* bytes = nullptr;  // jpeg_mem_dest's buffer (malloc)
-  unsigned long size = 0;
+  jpeg_destination_mgr destination;
+  std::vector<uint8_t> out;
 };
+
+// One more block of output room, the bytes so far kept; false if there is no memory.
+bool growJpegOutput(JpegEncoding* state, size_t used) {
+  try {
+    state->out.resize(std::max<size_t>(2 * state->out.size(), 1 << 16));
+  } catch (const std::bad_alloc&) {
+    return false;
+  }
+  state->destination.next_output_byte = state->out.data() + used;
+  state->destination.free_in_buffer = state->out.size() - used;
+  return true;
+}
+
+JpegEncoding* encodingOf(j_compress_ptr info) { return static_cast<JpegEncoding*>(info->client_data); }
+
+void jpegOutputStart(j_compress_ptr info) {
+  if (!growJpegOutput(encodingOf(info), 0)) ERREXIT(info, JERR_OUT_OF_MEMORY);
+}
+
+boolean jpegOutputFull(j_compress_ptr info) {
+  JpegEncoding* state = encodingOf(info);
+  if (!growJpegOutput(state, state->out.size())) ERREXIT(info, JERR_OUT_OF_MEMORY);
+  return TRUE;
+}
+
+void jpegOutputEnd(j_compress_ptr info) {
+  JpegEncoding* state = encodingOf(info);
+  state->out.resize(state->out.size() - state->destination.free_in_buffer);  // shrinks: no allocation
+}
 
 struct JpegDecoding {
   jpeg_decompress_struct info;
   JpegErrors errors;
+  jpeg_progress_mgr progress;
   cv::Mat image;
 };
 
-Expected<cv::Mat> decodeJpeg(const uint8_t* data, size_t size, ImageRead read) {
-  auto state = std::make_unique<JpegDecoding>();
-  state->info.err = &useErrors(&state->errors)->manager;
-  jpeg_create_decompress(&state->info);
+Expected<cv::Mat> decodeJpeg(const uint8_t* data, size_t size, ImageRead read, cv::Size expected) {
+  auto state = std::make_unique<JpegDecoding>();  // zeroed: destroying it before create is safe
+  state->info.err = useErrors(&state->errors);
   if (setjmp(state->errors.jump)) {
     jpeg_destroy_decompress(&state->info);
     return Error{std::string("corrupt JPEG (") + state->errors.message + ")"};
   }
+  jpeg_create_decompress(&state->info);
+  state->progress.progress_monitor = jpegProgress;
+  state->info.progress = &state->progress;
   jpeg_mem_src(&state->info, data, static_cast<unsigned long>(size));
   jpeg_read_header(&state->info, TRUE);
   const int components = state->info.num_components;
+  const bool declared = static_cast<int>(state->info.image_width) == expected.width &&
+                        static_cast<int>(state->info.image_height) == expected.height;
   if (components != 1 && components != 3) {
     jpeg_destroy_decompress(&state->info);
     return Error{"JPEG with " + std::to_string(components) + " components (grey and colour are read)"};
   }
+  if (!declared) {  // another frame header than the one codec.cpp's walk found
+    jpeg_destroy_decompress(&state->info);
+    return Error{"JPEG frame header says " + std::to_string(state->info.image_width) + "x" +
+                 std::to_string(state->info.image_height) + ", expected " + std::to_string(expected.width) + "x" +
+                 std::to_string(expected.height)};
+  }
   const bool grey = read == ImageRead::kGrey || (read == ImageRead::kAsStored && components == 1);
   state->info.out_color_space = grey ? JCS_GRAYSCALE : JCS_EXT_BGR;
   jpeg_start_decompress(&state->info);
-  state->image.create(static_cast<int>(state->info.output_height), static_cast<int>(state->info.output_width),
-                      grey ? CV_8UC1 : CV_8UC3);
+  if (static_cast<int>(state->info.output_width) != expected.width ||
+      static_cast<int>(state->info.output_height) != expected.height ||
+      state->info.output_components != (grey ? 1 : 3)) {
+    jpeg_destroy_decompress(&state->info);
+    return Error{"JPEG decodes to another size or number of channels than it declared"};
+  }
+  state->image.create(expected.height, expected.width, grey ? CV_8UC1 : CV_8UC3);
   while (state->info.output_scanline < state->info.output_height) {
     JSAMPROW row = state->image.ptr<uint8_t>(static_cast<int>(state->info.output_scanline));
     jpeg_read_scanlines(&state->info, &row, 1);
   }
   jpeg_finish_decompress(&state->info);
   jpeg_destroy_decompress(&state->info);
-  if (state->errors.corrupt > 0) return Error{std::string("corrupt or truncated JPEG (") + state->errors.message + ")"};
   return state->image;
 }
 
 // ---- PNG ----
 
+constexpr bool kLittleEndianHost = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;
+
 struct PngState {
   png_structp png = nullptr;
   png_infop info = nullptr;
-  std::string message;
+  char message[256] = "";
   const uint8_t* data = nullptr;  // reading: the stream and how far it is read
   size_t size = 0, at = 0;
   std::vector<uint8_t> out;  // writing
@@ -120,7 +185,8 @@ struct PngState {
 };
 
 void pngFail(png_structp png, png_const_charp message) {
-  static_cast<PngState*>(png_get_error_ptr(png))->message = message;
+  auto* state = static_cast<PngState*>(png_get_error_ptr(png));
+  std::snprintf(state->message, sizeof state->message, "%s", message);
   png_longjmp(png, 1);
 }
 
@@ -135,10 +201,18 @@ void pngRead(png_structp png, png_bytep out, size_t bytes) {
 
 void pngWrite(png_structp png, png_bytep in, size_t bytes) {
   auto* state = static_cast<PngState*>(png_get_io_ptr(png));
-  state->out.insert(state->out.end(), in, in + bytes);
+  bool grown = true;
+  try {
+    state->out.insert(state->out.end(), in, in + bytes);
+  } catch (const std::bad_alloc&) {
+    grown = false;
+  }
+  if (!grown) png_error(png, "out of memory");
 }
 
 void pngFlush(png_structp) {}
+
+bool has_colour_or_palette(int colour_type) { return (colour_type & PNG_COLOR_MASK_COLOR) != 0; }
 
 // The transforms that give 'read' from what the stream holds: grey as 8-bit grey, colour as
 // 8-bit BGR, as stored with its own depth and channels (colour as BGR, palette expanded).
@@ -150,13 +224,11 @@ int pngTransforms(png_structp png, png_infop info, ImageRead read) {
   if (colour_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
   const bool has_colour = (colour_type & PNG_COLOR_MASK_COLOR) != 0;
   bool alpha = (colour_type & PNG_COLOR_MASK_ALPHA) != 0;
-  if (png_get_valid(png, info, PNG_INFO_tRNS)) {
-    if (read == ImageRead::kAsStored) {
-      png_set_tRNS_to_alpha(png);
-      alpha = true;
-    } else {
-      png_set_strip_alpha(png);
-    }
+  // A transparent colour (tRNS) is an alpha channel as stored for colour and palette images
+  // (a palette's expansion makes one anyway); a grey image stays one channel, as OpenCV reads it.
+  if (png_get_valid(png, info, PNG_INFO_tRNS) && has_colour_or_palette(colour_type)) {
+    png_set_tRNS_to_alpha(png);
+    alpha = true;
   }
   int depth = bit_depth == 16 ? CV_16U : CV_8U;
   if (read != ImageRead::kAsStored) {
@@ -173,13 +245,13 @@ int pngTransforms(png_structp png, png_infop info, ImageRead read) {
     png_set_bgr(png);
     channels = alpha ? 4 : 3;
   }
-  if (depth == CV_16U) png_set_swap(png);  // PNG is big-endian; cv::Mat holds this host's order
+  if (depth == CV_16U && kLittleEndianHost) png_set_swap(png);  // PNG is big-endian
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
   return CV_MAKETYPE(depth, channels);
 }
 
-Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read) {
+Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read, cv::Size expected) {
   auto state = std::make_unique<PngState>();
   state->data = data, state->size = size;
   state->png = png_create_read_struct(PNG_LIBPNG_VER_STRING, state.get(), pngFail, pngWarn);
@@ -191,7 +263,7 @@ Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read) {
   }
   if (setjmp(png_jmpbuf(state->png))) {
     png_destroy_read_struct(&state->png, &state->info, nullptr);
-    return Error{"corrupt PNG (" + state->message + ")"};
+    return Error{std::string("corrupt PNG (") + state->message + ")"};
   }
   png_set_user_limits(state->png, kMaxDecodedSide, kMaxDecodedSide);
   png_set_read_fn(state->png, state.get(), pngRead);
@@ -199,6 +271,7 @@ Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read) {
   const int type = pngTransforms(state->png, state->info, read);
   const int width = static_cast<int>(png_get_image_width(state->png, state->info));
   const int height = static_cast<int>(png_get_image_height(state->png, state->info));
+  if (width != expected.width || height != expected.height) png_error(state->png, "IHDR differs from the size read");
   if (png_get_rowbytes(state->png, state->info) != static_cast<size_t>(width) * CV_ELEM_SIZE(type)) {
     png_error(state->png, "unexpected row size after its transforms");
   }
@@ -215,15 +288,18 @@ Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read) {
 
 std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_huffman) {
   CV_Assert(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3) && !image.empty());
-  auto state = std::make_unique<JpegEncoding>();
-  state->info.err = &useErrors(&state->errors)->manager;
-  jpeg_create_compress(&state->info);
+  auto state = std::make_unique<JpegEncoding>();  // zeroed: destroying it before create is safe
+  state->info.err = useErrors(&state->errors);
   if (setjmp(state->errors.jump)) {  // only a programming error or no memory gets here
     jpeg_destroy_compress(&state->info);
-    std::free(state->bytes);
     CV_Error(cv::Error::StsError, std::string("JPEG encoding failed: ") + state->errors.message);
   }
-  jpeg_mem_dest(&state->info, &state->bytes, &state->size);
+  jpeg_create_compress(&state->info);
+  state->info.client_data = state.get();
+  state->destination.init_destination = jpegOutputStart;
+  state->destination.empty_output_buffer = jpegOutputFull;
+  state->destination.term_destination = jpegOutputEnd;
+  state->info.dest = &state->destination;
   state->info.image_width = static_cast<JDIMENSION>(image.cols);
   state->info.image_height = static_cast<JDIMENSION>(image.rows);
   state->info.input_components = image.channels();
@@ -238,9 +314,7 @@ std::vector<uint8_t> encodeJpeg(const cv::Mat& image, int quality, bool optimal_
   }
   jpeg_finish_compress(&state->info);
   jpeg_destroy_compress(&state->info);
-  std::vector<uint8_t> out(state->bytes, state->bytes + state->size);
-  std::free(state->bytes);
-  return out;
+  return std::move(state->out);
 }
 
 std::vector<uint8_t> encodePng(const cv::Mat& image) {
@@ -255,7 +329,7 @@ std::vector<uint8_t> encodePng(const cv::Mat& image) {
   }
   if (setjmp(png_jmpbuf(state->png))) {  // only a programming error or no memory gets here
     png_destroy_write_struct(&state->png, &state->info);
-    CV_Error(cv::Error::StsError, "PNG encoding failed: " + state->message);
+    CV_Error(cv::Error::StsError, std::string("PNG encoding failed: ") + state->message);
   }
   png_set_write_fn(state->png, state.get(), pngWrite, pngFlush);
   png_set_compression_level(state->png, 1);  // fast: these images go to files and the link
@@ -266,7 +340,7 @@ std::vector<uint8_t> encodePng(const cv::Mat& image) {
                PNG_FILTER_TYPE_BASE);
   png_write_info(state->png, state->info);
   if (image.channels() > 1) png_set_bgr(state->png);
-  if (image.depth() == CV_16U) png_set_swap(state->png);
+  if (image.depth() == CV_16U && kLittleEndianHost) png_set_swap(state->png);
   for (int v = 0; v < image.rows; ++v) png_write_row(state->png, const_cast<uint8_t*>(image.ptr<uint8_t>(v)));
   png_write_end(state->png, state->info);
   png_destroy_write_struct(&state->png, &state->info);
@@ -299,7 +373,12 @@ Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, ImageRead read, 
                  ", expected " + std::to_string(expected.width) + "x" + std::to_string(expected.height)};
   }
   const bool jpeg = size >= 2 && data[0] == 0xFF && data[1] == 0xD8;  // else PNG: encodedImageSize read no other
-  Expected<cv::Mat> image = jpeg ? decodeJpeg(data, size, read) : decodePng(data, size, read);
+  Expected<cv::Mat> image = Error{""};
+  try {
+    image = jpeg ? decodeJpeg(data, size, read, expected) : decodePng(data, size, read, expected);
+  } catch (const std::exception& e) {  // no memory for the image itself (within the expected size)
+    return Error{std::string("image does not decode: ") + e.what()};
+  }
   if (!image) return Error{"image does not decode: " + image.error()};
   if (image->size() != expected) {
     return Error{"decoded image is " + std::to_string(image->cols) + "x" + std::to_string(image->rows) + ", expected " +
