@@ -44,7 +44,10 @@ function(rgbdslam_unity_exceptions)
     return()
   endif()
   set(lib ${PROJECT_SOURCE_DIR}/lib/src)
+  # codec_jpeg_png.cpp: jpeglib.h and jerror.h define macros (TRUE, FALSE, LOCAL, GLOBAL,
+  # ERREXIT, ...) and typedefs (boolean, INT32) that must not reach another source.
   set_source_files_properties(${lib}/image/pyramid.cpp ${lib}/model/point_creation.cpp
+      ${lib}/image/codec_jpeg_png.cpp
       DIRECTORY ${PROJECT_SOURCE_DIR}/lib PROPERTIES SKIP_UNITY_BUILD_INCLUSION ON)
   if(RGBDSLAM_BUILD_TESTS)
     set(tests ${PROJECT_SOURCE_DIR}/tests)

@@ -181,6 +181,15 @@ TEST(Codec, JpegAndPngAgreeWithOpenCvsImgcodecs) {
       }
     }
   }
+  // A progressive JPEG (a camera's or a file's; ours are baseline) within the decoder's
+  // memory and scan limits.
+  for (const int type : {CV_8UC1, CV_8UC3}) {
+    std::vector<uint8_t> progressive;
+    ASSERT_TRUE(cv::imencode(".jpg", codecTestImage(type, 21), progressive, {cv::IMWRITE_JPEG_PROGRESSIVE, 1}));
+    const auto decoded = decodeImage(progressive.data(), progressive.size(), ImageRead::kAsStored, cv::Size(640, 480));
+    ASSERT_TRUE(decoded) << decoded.error();
+    EXPECT_EQ(cv::norm(*decoded, cv::imdecode(progressive, cv::IMREAD_UNCHANGED), cv::NORM_INF), 0.0);
+  }
   // PNG: grey and BGR at 8 bits, depth at 16 (TUM's files), each read as imgcodecs reads it.
   for (const int type : {CV_8UC1, CV_8UC3, CV_8UC4, CV_16UC1}) {
     SCOPED_TRACE("PNG type " + std::to_string(type));

@@ -39,7 +39,7 @@ bool identical(const cv::Mat& a, const cv::Mat& b) {
 }
 
 // FAST-9 (the segment test of Rosten & Drummond, as cv::FAST with TYPE_9_16 and non-maximum
-// suppression): lib_tests links only OpenCV core/imgproc/imgcodecs, not features2d.
+// suppression), written out here as an independent check of the corners the library finds.
 const int kCircle[16][2] = {{0, -3}, {1, -3}, {2, -2}, {3, -1}, {3, 0},  {3, 1},
                             {2, 2},  {1, 3},  {0, 3},  {-1, 3}, {-2, 2}, {-3, 1},
                             {-3, 0}, {-3, -1}, {-2, -2}, {-1, -3}};

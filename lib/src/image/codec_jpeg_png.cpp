@@ -19,8 +19,11 @@
 // Hostile input: the size is checked against the expected one before a pixel is allocated
 // (the header walk of codec.cpp first, then libjpeg's and libpng's own reading of it, which
 // a crafted stream can make differ), any libjpeg warning (corrupt data it would decode on
-// past) ends the decoding at once, and a JPEG of more than kMaxJpegScans scans (a
-// progressive stream can hold thousands, each a pass over the image) is refused.
+// past) ends the decoding at once, a JPEG of more than kMaxJpegScans scans (a progressive
+// stream can hold thousands, each a pass over the image) is refused, libjpeg's working
+// memory is held to what a progressive colour image of the expected size needs, and a PNG's
+// ancillary chunks other than tRNS are skipped unread (compressed text could inflate to
+// gigabytes).
 #include <algorithm>
 #include <csetjmp>
 #include <cstddef>
@@ -42,9 +45,21 @@
 namespace rgbdslam {
 namespace {
 
+// Runs 'allocate' (an image's buffer, within the expected size); false if there was no
+// memory, so that the caller can destroy its decoder before it returns.
+template <typename Allocate>
+bool allocated(Allocate allocate) {
+  try {
+    allocate();
+  } catch (const std::exception&) {  // cv::Exception or std::bad_alloc
+    return false;
+  }
+  return true;
+}
+
 // ---- JPEG ----
 
-constexpr int kMaxJpegScans = 100;  // a baseline JPEG has 1, libjpeg's progressive ones 6-10
+constexpr int kMaxJpegScans = 32;  // a baseline JPEG has 1, libjpeg's progressive ones 6-10
 
 struct JpegErrors {
   jpeg_error_mgr manager;
@@ -93,7 +108,7 @@ struct JpegEncoding {
 bool growJpegOutput(JpegEncoding* state, size_t used) {
   try {
     state->out.resize(std::max<size_t>(2 * state->out.size(), 1 << 16));
-  } catch (const std::bad_alloc&) {
+  } catch (...) {  // bad_alloc, length_error: nothing may cross the library's frames
     return false;
   }
   state->destination.next_output_byte = state->out.data() + used;
@@ -135,6 +150,10 @@ Expected<cv::Mat> decodeJpeg(const uint8_t* data, size_t size, ImageRead read, c
   jpeg_create_decompress(&state->info);
   state->progress.progress_monitor = jpegProgress;
   state->info.progress = &state->progress;
+  // A progressive stream's coefficients (2 bytes each, 3 components at full resolution at
+  // most), plus working memory: beyond it libjpeg stops with "backing store not supported".
+  state->info.mem->max_memory_to_use =
+      6L * expected.width * expected.height + (16L << 20);
   jpeg_mem_src(&state->info, data, static_cast<unsigned long>(size));
   jpeg_read_header(&state->info, TRUE);
   const int components = state->info.num_components;
@@ -159,7 +178,10 @@ Expected<cv::Mat> decodeJpeg(const uint8_t* data, size_t size, ImageRead read, c
     jpeg_destroy_decompress(&state->info);
     return Error{"JPEG decodes to another size or number of channels than it declared"};
   }
-  state->image.create(expected.height, expected.width, grey ? CV_8UC1 : CV_8UC3);
+  if (!allocated([&] { state->image.create(expected.height, expected.width, grey ? CV_8UC1 : CV_8UC3); })) {
+    jpeg_destroy_decompress(&state->info);
+    return Error{"no memory for the image"};
+  }
   while (state->info.output_scanline < state->info.output_height) {
     JSAMPROW row = state->image.ptr<uint8_t>(static_cast<int>(state->info.output_scanline));
     jpeg_read_scanlines(&state->info, &row, 1);
@@ -204,7 +226,7 @@ void pngWrite(png_structp png, png_bytep in, size_t bytes) {
   bool grown = true;
   try {
     state->out.insert(state->out.end(), in, in + bytes);
-  } catch (const std::bad_alloc&) {
+  } catch (...) {  // bad_alloc, length_error: nothing may cross the library's frames
     grown = false;
   }
   if (!grown) png_error(png, "out of memory");
@@ -266,6 +288,8 @@ Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read, cv
     return Error{std::string("corrupt PNG (") + state->message + ")"};
   }
   png_set_user_limits(state->png, kMaxDecodedSide, kMaxDecodedSide);
+  png_set_keep_unknown_chunks(state->png, PNG_HANDLE_CHUNK_NEVER, nullptr, -1);  // all but the critical ones and tRNS
+  png_set_chunk_malloc_max(state->png, 1 << 20);  // [bytes] what a chunk read whole may take
   png_set_read_fn(state->png, state.get(), pngRead);
   png_read_info(state->png, state->info);
   const int type = pngTransforms(state->png, state->info, read);
@@ -275,8 +299,13 @@ Expected<cv::Mat> decodePng(const uint8_t* data, size_t size, ImageRead read, cv
   if (png_get_rowbytes(state->png, state->info) != static_cast<size_t>(width) * CV_ELEM_SIZE(type)) {
     png_error(state->png, "unexpected row size after its transforms");
   }
-  state->image.create(height, width, type);
-  state->rows.resize(static_cast<size_t>(height));
+  if (!allocated([&] {
+        state->image.create(height, width, type);
+        state->rows.resize(static_cast<size_t>(height));
+      })) {
+    png_destroy_read_struct(&state->png, &state->info, nullptr);
+    return Error{"no memory for the image"};
+  }
   for (int v = 0; v < height; ++v) state->rows[static_cast<size_t>(v)] = state->image.ptr<uint8_t>(v);
   png_read_image(state->png, state->rows.data());
   png_read_end(state->png, nullptr);
