@@ -29,10 +29,10 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
-#include <new>
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <new>
 #include <string>
 
 #include "rgbdslam/image/codec.h"
@@ -234,8 +234,6 @@ void pngWrite(png_structp png, png_bytep in, size_t bytes) {
 
 void pngFlush(png_structp) {}
 
-bool has_colour_or_palette(int colour_type) { return (colour_type & PNG_COLOR_MASK_COLOR) != 0; }
-
 // The transforms that give 'read' from what the stream holds: grey as 8-bit grey, colour as
 // 8-bit BGR, as stored with its own depth and channels (colour as BGR, palette expanded).
 // Returns the image's type.
@@ -244,11 +242,11 @@ int pngTransforms(png_structp png, png_infop info, ImageRead read) {
   const int colour_type = png_get_color_type(png, info);
   if (colour_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
   if (colour_type == PNG_COLOR_TYPE_GRAY && bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
-  const bool has_colour = (colour_type & PNG_COLOR_MASK_COLOR) != 0;
+  const bool has_colour = (colour_type & PNG_COLOR_MASK_COLOR) != 0;  // palette too
   bool alpha = (colour_type & PNG_COLOR_MASK_ALPHA) != 0;
   // A transparent colour (tRNS) is an alpha channel as stored for colour and palette images
   // (a palette's expansion makes one anyway); a grey image stays one channel, as OpenCV reads it.
-  if (png_get_valid(png, info, PNG_INFO_tRNS) && has_colour_or_palette(colour_type)) {
+  if (png_get_valid(png, info, PNG_INFO_tRNS) && has_colour) {
     png_set_tRNS_to_alpha(png);
     alpha = true;
   }
