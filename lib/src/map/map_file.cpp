@@ -185,7 +185,8 @@ SE3 readSavedPose(MapFileReader* r) {
 }
 
 // The keyframe's depth in metres (KeyframeDepth::metres(), NaN = none) back in raw units:
-// exact for readings that came from raw units at this scale (float holds raw / scale to far better than half a unit).
+// exact for readings that came from raw units at this scale (float holds raw / scale to far
+// better than half a unit).
 cv::Mat metricDepthToRaw(const cv::Mat& metres, double scale) {
   cv::Mat raw(metres.size(), CV_16UC1);
   for (int v = 0; v < metres.rows; ++v) {

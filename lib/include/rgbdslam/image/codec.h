@@ -35,7 +35,7 @@ Expected<cv::Size> encodedImageSize(const uint8_t* data, size_t size);
 enum class ImageRead { kGrey, kColour, kAsStored };
 // JPEG/PNG bytes -> image, refused before decoding unless its header declares the expected
 // size (so a hostile header cannot make the decoder allocate more than the expected image).
-// A corrupt or truncated stream is an error, never a partly grey image.
+// A corrupt or truncated stream is an error, never an image with made-up rows.
 Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, ImageRead read, cv::Size expected);
 // JPEG/PNG bytes -> image with 'channels' (1 grey, 3 BGR), checked against the expected size.
 Expected<cv::Mat> decodeImage(const uint8_t* data, size_t size, int channels, int width,
