@@ -114,9 +114,9 @@ Expected<T> decodeMessage(const void* data, size_t size) {
 // A frame at the camera's rate, decoded with the buffers of the one before: 'msg' and
 // 'frame' are the caller's, kept from frame to frame (rgbd-tracker). Why: a 640x480 frame is
 // 1.5 MB, and fresh buffers for its message and images (4.6 MB a frame) are either new
-// mappings, page faults (with tracker_node.malloc_mmap_threshold_kb=128 the corridor's median
-// latency was 5.0 ms with fresh buffers, 3.8 ms with these; 2.9 ms with glibc's default), or
-// blocks that churn the heap.
+// mappings, page faults (with glibc's mmap threshold fixed at 128 kB the corridor's median
+// latency was 5.0 ms with fresh buffers, 3.8 ms with these; 2.9 ms with glibc's default;
+// docs/open_work.md, session 24), or blocks that churn the heap.
 Status decodeFrame(const void* data, size_t size, rgbdslam::rgbd_frame_t* msg, RgbdFrame* frame);
 
 }  // namespace rgbdslam

@@ -1,6 +1,7 @@
 #include "common/process.h"
 
-#include <malloc.h>
+#include "common/allocator.h"
+
 #include <sched.h>
 
 #include <cerrno>
@@ -62,38 +63,8 @@ MemoryUsage memoryUsage() {
     if (target && status >> value) *target = value;
     status.ignore(1 << 12, '\n');
   }
-#if !defined(__SANITIZE_ADDRESS__)  // ASan's allocator is not malloc's: heap_kb stays -1
-  const struct mallinfo2 heap = mallinfo2();  // glibc: summed over every arena
-  usage.heap_kb = static_cast<int64_t>((heap.uordblks + heap.hblkhd) / 1024);
-#endif
+  usage.heap_kb = heapInUseKb();
   return usage;
-}
-
-Status setMallocMmapThreshold(int threshold_kb) {
-  if (threshold_kb == 0) return Status{};
-#if defined(__SANITIZE_ADDRESS__)
-  return Error{"the malloc of AddressSanitizer has no mmap threshold"};
-#else
-  // glibc's own maximum of the dynamic threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64 bits).
-  constexpr int kMaxKb = 32 * 1024;
-  if (threshold_kb < 0 || threshold_kb > kMaxKb || mallopt(M_MMAP_THRESHOLD, threshold_kb * 1024) != 1 ||
-      mallopt(M_TRIM_THRESHOLD, threshold_kb * 1024) != 1) {
-    return Error{"malloc refused an mmap threshold of " + std::to_string(threshold_kb) + " kB"};
-  }
-  return Status{};
-#endif
-}
-
-Status setMallocArenaMax(int arenas) {
-  if (arenas == 0) return Status{};
-#if defined(__SANITIZE_ADDRESS__)
-  return Error{"the malloc of AddressSanitizer has no arenas"};
-#else
-  if (arenas < 0 || mallopt(M_ARENA_MAX, arenas) != 1) {
-    return Error{"malloc refused at most " + std::to_string(arenas) + " arenas"};
-  }
-  return Status{};
-#endif
 }
 
 void printPeakRss() {

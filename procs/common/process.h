@@ -28,9 +28,8 @@ int64_t utimeNow();
 // /proc/self/status [kB]; -1 where it cannot be read (not Linux, /proc not mounted). Every
 // process reports both in its status messages (rss_kb, peak_rss_kb) and prints peak_rss_mb
 // at exit, so memory over a long flight can be followed from the ground. heap_kb is what
-// the program holds from malloc now (glibc's mallinfo2: blocks in use plus mmapped ones):
-// RSS growing while it stays flat is the allocator's fragmentation, not the program's data
-// (-1 under AddressSanitizer, whose allocator mallinfo2 does not see).
+// the program holds from malloc now (common/allocator.h, heapInUseKb): RSS growing while it
+// stays flat is memory the allocator keeps, not the program's data (-1 under the sanitizers).
 struct MemoryUsage {
   int64_t rss_kb = -1;
   int64_t peak_rss_kb = -1;
@@ -65,30 +64,6 @@ void warnIfStoreInMemory(const std::string& program, const KeyframeStore* store)
 Status setRealtimePriority(int priority, bool reset_on_fork = true);
 // The calling thread's SCHED_FIFO or SCHED_RR priority; 0 under a normal policy.
 int realtimePriority();
-
-// Large blocks (at least 'threshold_kb' [kB]) from their own mappings, given back to the
-// system when freed, and an arena's free top beyond as much given back too (glibc's
-// M_MMAP_THRESHOLD and M_TRIM_THRESHOLD, fixed; a large block still reuses free space an
-// arena holds). glibc starts at 128 kB but raises the threshold to the largest mapped block
-// freed so far, up to 32 MB: in the tracker a frame's LCM buffer (1.5 MB) within its first
-// second, after which frames, images and pyramids come from the threads' arenas, whose
-// freed memory stays resident. Fixing it trades latency for memory, so it is the option
-// tracker_node.malloc_mmap_threshold_kb, 0 (glibc's dynamic threshold) by default. Measured
-// through the suite (docs/open_work.md, session 24): at 128 kB the corridor's tracker peak
-// 105 -> 95 MB for a median latency 2.9 -> 3.8 ms (a fresh mapping is page faults: LCM's
-// 1.5 MB buffer of each frame alone costs about 0.8 ms); the ten-minute flight's peak
-// 132 -> 116 MB and 3.3 -> 2.5 MB a minute, for 0.7 ms more per tracked frame, 6 ms more
-// per lost one and twice the frames skipped. An error when the allocator refuses (above
-// 32 MB, or not glibc's: AddressSanitizer's has no threshold). 0 changes nothing.
-Status setMallocMmapThreshold(int threshold_kb);
-
-// At most 'arenas' malloc arenas for the process's threads (glibc's M_ARENA_MAX; 0: glibc's
-// default, 8 per core). glibc gives each thread that allocates while the arenas it knows
-// are busy an arena of its own, and what a thread frees stays resident in that arena, so
-// every thread of the tracker (LCM's receive threads, the encoder, the keyframe worker, the
-// relocaliser) keeps its own high-water mark. Set before the threads start. An error when
-// the allocator refuses (not glibc's: AddressSanitizer's has no arenas).
-Status setMallocArenaMax(int arenas);
 
 // Opens LCM at 'url'; an error (not an abort) if the URL is bad or the network unusable.
 Expected<std::unique_ptr<lcm::LCM>> openLcm(const std::string& url);

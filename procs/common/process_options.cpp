@@ -29,14 +29,6 @@ void TrackerProcessOptions::bind(OptionRegistry* r) {
           "for a core while the mapper, the capture or other software runs (needs root, CAP_SYS_NICE "
           "or RLIMIT_RTPRIO; refused: a warning, normal priority); LCM's receive threads, which carry "
           "its frames, too; the encoder and keyframe worker at the normal priority (0: normal priority)");
-  r->bind(s, "malloc_mmap_threshold_kb", &malloc_mmap_threshold_kb, 0, 32768, "kB",
-          "blocks of at least this size (frames, images) get their own memory mappings, given back to the "
-          "system when freed: less resident memory for more latency (128: about 10-16 MB less, 0.7-0.9 ms more "
-          "per tracked frame; common/process.h) (0: glibc's default, a threshold that rises to the largest block freed)");
-  r->bind(s, "malloc_arena_max", &malloc_arena_max, 0, 64, "arenas",
-          "at most this many malloc arenas for the tracker's threads (common/process.h): what a thread "
-          "frees stays resident in its own arena, so each thread keeps its own high-water mark "
-          "(0: glibc's default, 8 per core)");
   r->bind(s, "relocalise_off_frame_path", &relocalise_off_frame_path,
           "while lost, relocalise on a second thread: the frame being relocalised and those after it "
           "until it is done are answered lost at once, and the first frame after a relocalisation that "

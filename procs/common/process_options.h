@@ -35,17 +35,6 @@ struct TrackerProcessOptions {
   // its cores with whatever else runs; the onboard scripts (scripts/run-onboard,
   // scripts/bench-suite) set it.
   int realtime_priority = 0;
-  // Blocks of at least this size get their own mappings, given back when freed
-  // (common/process.h, setMallocMmapThreshold: memory for latency); 0: glibc's dynamic
-  // threshold [kB].
-  int malloc_mmap_threshold_kb = 0;
-  // At most this many malloc arenas (common/process.h, setMallocArenaMax); 0: glibc's
-  // default. Measured on the 2-minute flight through the suite (one run each, 2026-11-28,
-  // README "Session 31"): tracker peak 101-104 / 112.2 / 125.7-129.9 MB with 1 / 2 /
-  // glibc's default, latency the same. One of three runs with 1 lost the hall for good
-  // (967 posed), as runs with glibc's default sometimes do: glibc's default stays until
-  // enough runs say whether one arena changes where the tracker is lost.
-  int malloc_arena_max = 0;
   // While lost, a frame is relocalised on a thread of its own and the frames meanwhile are
   // answered lost at once (tracker_node.h); false: on the tracking thread, each relocalised
   // frame's pose as late as its relocalisation.

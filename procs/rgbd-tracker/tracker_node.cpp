@@ -83,12 +83,6 @@ int TrackerNode::run(const std::atomic<bool>& stop) {
   // tracker_node.realtime_priority: LCM's receive threads start with the first subscriptions
   // and carry every frame and map to this thread, so they inherit SCHED_FIFO; the threads
   // started after them (encoder, keyframe worker) run at the normal priority.
-  if (Status set = setMallocMmapThreshold(options_.process.malloc_mmap_threshold_kb); !set) {
-    std::cerr << "rgbd-tracker: warning: tracker_node.malloc_mmap_threshold_kb: " << set.error() << "\n";
-  }
-  if (Status set = setMallocArenaMax(options_.process.malloc_arena_max); !set) {
-    std::cerr << "rgbd-tracker: warning: tracker_node.malloc_arena_max: " << set.error() << "\n";
-  }
   const int priority = options_.process.realtime_priority;
   if (priority > 0) {
     if (Status set = setRealtimePriority(priority, /*reset_on_fork=*/false); !set) {
