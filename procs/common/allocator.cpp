@@ -3,16 +3,33 @@
 #if defined(RGBDSLAM_JEMALLOC)
 #include <jemalloc/jemalloc.h>
 
-// jemalloc reads its options from this symbol as it starts, before main (jemalloc(3),
-// "TUNING"): purging freed pages runs on jemalloc's own background thread instead of inside
-// whichever malloc or free crosses the decay's deadline, the tracking thread's among them.
-// The background thread starts before main, so it keeps the normal scheduling policy when the
-// tracking thread later takes SCHED_FIFO (tracker_node.realtime_priority).
-extern "C" {
-const char* malloc_conf = "background_thread:true";
+#include <cstdio>
+
+namespace {
+// Purging on jemalloc's background threads instead of inside whichever malloc or free
+// crosses the decay's deadline, the tracking thread's among them. Turned on through the
+// "background_thread" control, which jemalloc(3) gives as the reliable way (the option of
+// the same name, read as jemalloc starts, "may cause crash or deadlock during
+// initialization"). This runs during static initialisation, on the main thread before main:
+// jemalloc's first background thread is created here, and it creates the others itself, so
+// none of them inherits the SCHED_FIFO the tracking thread takes later
+// (tracker_node.realtime_priority).
+bool startBackgroundPurging() {
+  bool on = true;
+  if (mallctl("background_thread", nullptr, nullptr, &on, sizeof(on)) == 0) return true;
+  std::fprintf(stderr, "warning: jemalloc's background purging did not start: freed memory goes back to the "
+                       "system from the threads that free it\n");
+  return false;
 }
-#else
-#include <malloc.h>
+}  // namespace
+
+// Named in the link of every program that links procs/common (procs/CMakeLists.txt,
+// --undefined), so that the linker takes this file from the archive, and with it the
+// initialisation above, even where nothing else in the program calls into it.
+extern "C" {
+extern const bool rgbdslam_allocator_configured;
+const bool rgbdslam_allocator_configured = startBackgroundPurging();
+}
 #endif
 
 namespace rgbdslam {
@@ -20,10 +37,18 @@ namespace rgbdslam {
 std::string allocatorName() {
 #if defined(RGBDSLAM_JEMALLOC)
   return "jemalloc";
-#elif defined(__SANITIZE_ADDRESS__)
-  return "sanitizer";
 #else
-  return "glibc";
+  return "sanitizer";
+#endif
+}
+
+bool allocatorPurgesInBackground() {
+#if defined(RGBDSLAM_JEMALLOC)
+  bool on = false;
+  size_t size = sizeof(on);
+  return mallctl("background_thread", &on, &size, nullptr, 0) == 0 && on;
+#else
+  return false;
 #endif
 }
 
@@ -37,11 +62,8 @@ int64_t heapInUseKb() {
   size = sizeof(allocated);
   if (mallctl("stats.allocated", &allocated, &size, nullptr, 0) != 0) return -1;
   return static_cast<int64_t>(allocated / 1024);
-#elif defined(__SANITIZE_ADDRESS__)
-  return -1;  // ASan's allocator is not glibc's: mallinfo2 does not see it
 #else
-  const struct mallinfo2 heap = mallinfo2();  // summed over every arena
-  return static_cast<int64_t>((heap.uordblks + heap.hblkhd) / 1024);
+  return -1;  // the sanitizers' allocators do not say
 #endif
 }
 

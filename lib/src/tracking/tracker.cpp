@@ -14,7 +14,6 @@
 #include <deque>
 #include <future>
 #include <limits>
-#include <malloc.h>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <unordered_map>
@@ -1447,16 +1446,9 @@ void Tracker::Impl::warmUpVocabulary() {
   vocabulary_warmup_ = std::async(std::launch::async, [ready = vocabulary_ready_] {
     projectVocabulary();
     ready->store(true);
-    // The training's frames (~20 MB) are freed by now: give what glibc's malloc keeps of them
-    // back to the system (every arena; once per tracker, off the frame path). The suite's
-    // processes run on jemalloc (procs/common/allocator.h), which gives them back on its own:
-    // there this trims glibc's unused heap and costs nothing. Not under
-    // AddressSanitizer, whose allocator is not glibc's: glibc's malloc_trim then set up an
-    // arena for this thread that its exit handler found inconsistent ("malloc assertion
-    // failure in __malloc_arena_thread_freeres", DepthAlignment test, scripts/sanitize).
-#ifndef __SANITIZE_ADDRESS__
-    malloc_trim(0);
-#endif
+    // The training's frames (~20 MB) are freed by now. The suite's processes run on jemalloc
+    // (procs/common/allocator.h), which gives such pages back to the system on a thread of
+    // its own within its decay time (10 s), so nothing is trimmed here.
   });
 }
 
