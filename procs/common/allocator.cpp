@@ -17,8 +17,13 @@ namespace {
 bool startBackgroundPurging() {
   bool on = true;
   if (mallctl("background_thread", nullptr, nullptr, &on, sizeof(on)) == 0) return true;
+  // jemalloc 5.3 leaves the control on when a thread could not be created (pthread_create
+  // refused: a limit on threads), and with it on the program's own threads never purge:
+  // turned off again, they do.
+  bool off = false;
+  mallctl("background_thread", nullptr, nullptr, &off, sizeof(off));
   std::fprintf(stderr, "warning: jemalloc's background purging did not start: freed memory goes back to the "
-                       "system from the threads that free it\n");
+                       "system from the threads that allocate and free\n");
   return false;
 }
 }  // namespace
@@ -46,7 +51,13 @@ bool allocatorPurgesInBackground() {
 #if defined(RGBDSLAM_JEMALLOC)
   bool on = false;
   size_t size = sizeof(on);
-  return mallctl("background_thread", &on, &size, nullptr, 0) == 0 && on;
+  if (!rgbdslam_allocator_configured || mallctl("background_thread", &on, &size, nullptr, 0) != 0 || !on) return false;
+  uint64_t epoch = 1;  // statistics are a snapshot taken when the epoch advances
+  size = sizeof(epoch);
+  size_t threads = 0;
+  size_t threads_size = sizeof(threads);
+  return mallctl("epoch", &epoch, &size, &epoch, size) == 0 &&
+         mallctl("stats.background_thread.num_threads", &threads, &threads_size, nullptr, 0) == 0 && threads > 0;
 #else
   return false;
 #endif

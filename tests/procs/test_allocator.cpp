@@ -60,14 +60,14 @@ int64_t residentKb() {
   return resident_pages * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
-// allocator.cpp turned the background threads on, and freed pages go back to the system
-// while the program goes on allocating, as the tracker does frame after frame. (Whether the
-// background threads or the allocating thread purged is not observable here: jemalloc's
-// count of background runs reads 0 whenever a thread holds its lock. Without any further
-// allocation a sleeping background thread may not be woken at all, in a test as in a
-// program: one that allocates nothing more has nothing to give back on time either.) The
-// test's arena decays in 0.2 s instead of 10 s, and straight to the system (muzzy decay 0,
-// whatever MALLOC_CONF says), to keep the test short; both are set back after.
+// allocator.cpp turned the background threads on (the assertion), and freed pages go back to
+// the system while the program goes on. The test's arena decays in 0.2 s instead of 10 s,
+// and straight to the system (muzzy decay 0, whatever MALLOC_CONF says), to keep the test
+// short; both are set back after. A background thread asleep when the decay time changes
+// sleeps out the old one (10 s), so each 0.1 s the test advances its arena's decay epoch
+// ("arena.N.decay"), which with background threads on wakes them instead of purging on the
+// calling thread. The memory's fall alone would not tell who purged (with the threads off,
+// the calling thread would): the assertion on the threads does.
 TEST(Allocator, FreedPagesGoBackToTheSystemAsTheProgramGoesOn) {
   ASSERT_TRUE(allocatorPurgesInBackground()) << "allocator.cpp did not start jemalloc's background threads";
   const std::string arena = "arena." + std::to_string(readControl<unsigned>("thread.arena"));
@@ -87,14 +87,9 @@ TEST(Allocator, FreedPagesGoBackToTheSystemAsTheProgramGoesOn) {
   const int64_t held_kb = residentKb();
   for (char* block : blocks) std::free(block);
   int64_t rss_kb = held_kb;
+  const std::string decay_now = arena + ".decay";
   for (int i = 0; i < 100 && held_kb - rss_kb < 48 * 1024; ++i) {  // at most 10 s
-    for (int k = 0; k < 16; ++k) {  // the program goes on: a block allocated, touched and freed
-      [[maybe_unused]] static char* volatile escaped;
-      char* block = static_cast<char*>(std::malloc(kBlock));
-      escaped = block;
-      block[0] = 1;
-      std::free(block);
-    }
+    mallctl(decay_now.c_str(), nullptr, nullptr, nullptr, 0);
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     rss_kb = residentKb();
   }
