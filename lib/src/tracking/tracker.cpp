@@ -1447,8 +1447,8 @@ void Tracker::Impl::warmUpVocabulary() {
     projectVocabulary();
     ready->store(true);
     // The training's frames (~20 MB) are freed by now. The suite's processes run on jemalloc
-    // (procs/common/allocator.h), which gives such pages back to the system on a thread of
-    // its own within its decay time (10 s), so nothing is trimmed here.
+    // (procs/common/allocator.h), which gives such pages back to the system from background
+    // threads of its own within its decay time (10 s), so nothing is trimmed here.
   });
 }
 
