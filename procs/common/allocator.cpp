@@ -35,29 +35,28 @@ extern "C" {
 extern const bool rgbdslam_allocator_configured;
 const bool rgbdslam_allocator_configured = startBackgroundPurging();
 }
+
+namespace {
+// jemalloc's statistics are a snapshot taken when the epoch advances.
+bool refreshStatistics() {
+  uint64_t epoch = 1;
+  size_t size = sizeof(epoch);
+  return mallctl("epoch", &epoch, &size, &epoch, size) == 0;
+}
+}  // namespace
 #endif
 
 namespace rgbdslam {
-
-std::string allocatorName() {
-#if defined(RGBDSLAM_JEMALLOC)
-  return "jemalloc";
-#else
-  return "sanitizer";
-#endif
-}
 
 bool allocatorPurgesInBackground() {
 #if defined(RGBDSLAM_JEMALLOC)
   bool on = false;
   size_t size = sizeof(on);
   if (!rgbdslam_allocator_configured || mallctl("background_thread", &on, &size, nullptr, 0) != 0 || !on) return false;
-  uint64_t epoch = 1;  // statistics are a snapshot taken when the epoch advances
-  size = sizeof(epoch);
   size_t threads = 0;
-  size_t threads_size = sizeof(threads);
-  return mallctl("epoch", &epoch, &size, &epoch, size) == 0 &&
-         mallctl("stats.background_thread.num_threads", &threads, &threads_size, nullptr, 0) == 0 && threads > 0;
+  size = sizeof(threads);
+  return refreshStatistics() &&
+         mallctl("stats.background_thread.num_threads", &threads, &size, nullptr, 0) == 0 && threads > 0;
 #else
   return false;
 #endif
@@ -65,12 +64,9 @@ bool allocatorPurgesInBackground() {
 
 int64_t heapInUseKb() {
 #if defined(RGBDSLAM_JEMALLOC)
-  // jemalloc's statistics are a snapshot taken when the epoch advances.
-  uint64_t epoch = 1;
-  size_t size = sizeof(epoch);
-  if (mallctl("epoch", &epoch, &size, &epoch, size) != 0) return -1;
+  if (!refreshStatistics()) return -1;
   size_t allocated = 0;
-  size = sizeof(allocated);
+  size_t size = sizeof(allocated);
   if (mallctl("stats.allocated", &allocated, &size, nullptr, 0) != 0) return -1;
   return static_cast<int64_t>(allocated / 1024);
 #else

@@ -15,12 +15,8 @@
 // on the freeing thread; the frame path's largest is LCM's 1.5 MB frame buffer). Measured:
 // docs/open_work.md, session 43.
 #include <cstdint>
-#include <string>
 
 namespace rgbdslam {
-
-// The allocator built in: "jemalloc", or "sanitizer" in the instrumented builds.
-std::string allocatorName();
 
 // Whether jemalloc's background threads purge freed pages (false in the instrumented builds,
 // or if they could not start: allocator.cpp warns on stderr then).

@@ -10,8 +10,6 @@
 #include <thread>
 #include <vector>
 
-#include "common/process.h"
-
 #if defined(RGBDSLAM_JEMALLOC)
 #include <fcntl.h>
 #include <jemalloc/jemalloc.h>
@@ -36,7 +34,6 @@ T readControl(const char* name) {
 // operator new's too), not only calls made to it by name: a link order that left glibc's
 // malloc in front would build and run, with none of the measured effect.
 TEST(Allocator, MallocAndNewAreJemallocs) {
-  EXPECT_EQ(allocatorName(), "jemalloc");
   const uint64_t before = readControl<uint64_t>("thread.allocated");
   [[maybe_unused]] static void* volatile escaped;  // so that the compiler keeps malloc and new
   void* block = std::malloc(1 << 20);
@@ -100,8 +97,7 @@ TEST(Allocator, FreedPagesGoBackToTheSystemAsTheProgramGoesOn) {
   EXPECT_EQ(mallctl(muzzy.c_str(), nullptr, nullptr, &restore_muzzy, sizeof(restore_muzzy)), 0);
 }
 #else
-TEST(Allocator, NamedInTheInstrumentedBuilds) {
-  EXPECT_EQ(allocatorName(), "sanitizer");
+TEST(Allocator, SaysNothingInTheInstrumentedBuilds) {
   EXPECT_FALSE(allocatorPurgesInBackground());
   EXPECT_EQ(heapInUseKb(), -1);
 }
