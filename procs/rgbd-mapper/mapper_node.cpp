@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <string>
 
 #include "common/lcm_conversions.h"
 #include "common/process.h"
@@ -145,7 +146,8 @@ void MapperNode::workerLoop() {
                     << "\n";
         }
         const std::string loop = describe(step->result.loop);
-        if (!loop.empty()) std::cerr << "rgbd-mapper: keyframe " << step->id << ": " << loop << "\n";
+        // One write: scripts/lib/loop_audit.py parses the line, which another thread's output must not cut.
+        if (!loop.empty()) std::cerr << "rgbd-mapper: keyframe " + std::to_string(step->id) + ": " + loop + "\n";
         if (!step->journal_error.empty()) {
           std::cerr << "rgbd-mapper: error: " << step->journal_error << " (the map is not persisted)\n";
         }

@@ -15,6 +15,7 @@
 #include "common/process.h"
 #include "common/source_factory.h"
 #include "rgbdslam/camera/calibration_io.h"
+#include "rgbdslam/eval/loop_audit.h"
 #include "rgbdslam/eval/trajectory_eval.h"
 
 namespace rgbdslam {
@@ -344,6 +345,12 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     std::printf("ate_rmse_m unknown (no ground truth)\n");
     return;
   }
+  // Each recognised place's loop edge against the truth: wrong closures (eval/loop_audit.h).
+  const LoopAuditOptions audit;
+  const auto& recognised = slam_->mapper().loopsRecognised();
+  std::printf("%s", toKeyValueText(auditLoops(*groundtruth_, recognised, audit), audit).c_str());
+  std::printf("loop_audit_past_cap %ld\n",  // recognised after LoopCloser::kMaxRecognisedKept: not audited
+              slam_->mapper().loopClosures().recognised - static_cast<long>(recognised.size()));
   EvalOptions eval;
   eval.num_frames = static_cast<size_t>(stats.frames);
   auto result = evaluateTrajectory(*groundtruth_, trajectory, eval);

@@ -4,7 +4,8 @@
 # close a loop nor take a lost tracker:
 #  - the whole flight: the second room's keyframes are recognised as the first room's by
 #    appearance and verified with depth, and refused as farther than the drift explains
-#    (loops_beyond_drift); no loop is closed;
+#    (loops_beyond_drift); no loop is closed, and no loop edge in the map is wrong by the
+#    truth (loops_accepted_wrong, eval/loop_audit.h);
 #  - a 1 s cover in the second room, before it is mapped in the directions the camera turns
 #    to: the first room's keyframes show the same views, but a vehicle cannot have flown
 #    14 m in 1 s (tracker.relocalise_max_speed_m_s, 3 m/s): the tracker stays lost until it
@@ -25,6 +26,8 @@ at_most() { awk -v a="$(value "$1" "$2")" -v b="$3" 'BEGIN { exit !(a != "" && a
 run flight twins
 [ "$(value flight poses)" -ge 1400 ] || fail "flight: only $(value flight poses) of 1800 frames posed"
 [ "$(value flight loops_closed)" -eq 0 ] || fail "flight: $(value flight loops_closed) loops closed between lookalike rooms"
+[ "$(value flight loops_accepted_wrong)" -eq 0 ] \
+  || fail "flight: $(value flight loops_accepted_wrong) loop edges in the map are off the truth (eval/loop_audit.h)"
 [ "$(value flight loops_beyond_drift)" -ge 1 ] \
   || fail "flight: no lookalike keyframe was recognised and refused: the test no longer tests it"
 at_most flight ate_rmse_m 0.05

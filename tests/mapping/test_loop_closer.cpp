@@ -78,6 +78,23 @@ TEST(LoopCloser, ClosesALoopAndTakesOutTheDrift) {
   std::printf("loop %ld -> %ld closed: drift at the end %.3f m before, %.3f m after; largest correction %.3f m %.2f deg\n",
               static_cast<long>(closing.with), static_cast<long>(keyframes - 1), drift_before, drift_after,
               closing.correction_m, closing.correction_deg);
+  // Each recognised place is recorded with its edge as measured and both keyframes' times
+  // (rgbd-slam audits them against the truth: eval/loop_audit.h). The closing edge agrees
+  // with the room's truth, whatever the drift the map had.
+  const auto& places = closer.recognised();
+  const auto closed = std::find_if(places.begin(), places.end(), [](const LoopClosureResult& r) { return r.closed; });
+  ASSERT_NE(closed, places.end()) << places.size() << " places recorded, none closed";
+  const LoopClosureResult& recorded = *closed;
+  EXPECT_EQ(recorded.with, closing.with);
+  EXPECT_EQ(recorded.with_utime, map.keyframe(closing.with)->utime);
+  int query = -1;
+  for (int k = 0; k < keyframes; ++k) {
+    if (map.keyframe(k)->utime == recorded.query_utime) query = k;
+  }
+  ASSERT_GE(query, 0) << "no keyframe at the recorded query time " << recorded.query_utime;
+  const SE3 edge_error = (truth[closing.with].inverse() * truth[query]).inverse() * recorded.T_with_query;
+  EXPECT_LT(edge_error.translation().norm(), 0.03);
+  EXPECT_LT(edge_error.log().tail<3>().norm() * 180.0 / M_PI, 1.0);
   EXPECT_FALSE(changes.keyframes.empty());
   for (int k = 0; k < keyframes; ++k) {  // every point still 2 m in front of its keyframe
     const Keyframe& kf = *map.keyframe(k);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -116,6 +117,9 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
     if (match.recognised()) {
       ++counters_.recognised;
       result.with = match.best.keyframe;
+      result.T_with_query = match.best.T_k_q;
+      result.with_utime = map->keyframe(result.with)->utime;
+      result.query_utime = kf->utime;
     }
     result.recognise_ms = loopMsSince(start);
     if (match.recognised()) {
@@ -142,6 +146,7 @@ LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* ch
       } else {
         solveAndApply(map, loop, changes, &result);
       }
+      if (recognised_.size() < kMaxRecognisedKept) recognised_.push_back(result);
     }
   }
   places_->add(id, map->keyframe(id)->T_w_c, std::move(features));
@@ -181,22 +186,39 @@ void LoopCloser::solveAndApply(Map* map, const PoseGraphEdge& loop, MapChanges* 
   }
 }
 
+namespace {
+
+// Appends to a log line of 'size' bytes written up to *n (a full line stays as it is).
+__attribute__((format(printf, 4, 5))) void appendToLine(char* line, size_t size, int* n, const char* format, ...) {
+  if (*n < 0 || *n >= static_cast<int>(size)) return;
+  va_list args;
+  va_start(args, format);
+  const int added = std::vsnprintf(line + *n, size - *n, format, args);
+  va_end(args);
+  *n = added < 0 ? added : *n + added;
+}
+
+}  // namespace
+
 std::string describe(const LoopClosureResult& r) {
   if (r.place != PlaceStatus::kRecognised) return "";
-  char line[256];
+  char line[512];
   const char* verdict = r.agreed ? "agreed" : r.refused ? "refused" : r.closed ? "closed" : "below min_correction";
   int n = std::snprintf(line, sizeof line, "loop with keyframe %lld: %s", static_cast<long long>(r.with), verdict);
-  if (r.same_part && n > 0 && n < static_cast<int>(sizeof line)) {  // across parts the frames differ
-    n += std::snprintf(line + n, sizeof line - n, ", disagreement %.1f sigmas (%.3f m, %.2f deg)", r.disagreement_sigmas,
-                       r.disagreement_m, r.disagreement_deg);
+  if (r.same_part) {  // across parts the frames differ
+    appendToLine(line, sizeof line, &n, ", disagreement %.1f sigmas (%.3f m, %.2f deg)", r.disagreement_sigmas,
+                 r.disagreement_m, r.disagreement_deg);
   }
-  if (r.closed && n > 0 && n < static_cast<int>(sizeof line)) {
-    n += std::snprintf(line + n, sizeof line - n, ", correction %.3f m, %.2f deg", r.correction_m, r.correction_deg);
+  if (r.closed) appendToLine(line, sizeof line, &n, ", correction %.3f m, %.2f deg", r.correction_m, r.correction_deg);
+  if (r.joined_part >= 0) {
+    appendToLine(line, sizeof line, &n, ", part %lld joined to %lld", static_cast<long long>(r.joined_part),
+                 static_cast<long long>(r.joined_to));
   }
-  if (r.joined_part >= 0 && n > 0 && n < static_cast<int>(sizeof line)) {
-    std::snprintf(line + n, sizeof line - n, ", part %lld joined to %lld", static_cast<long long>(r.joined_part),
-                  static_cast<long long>(r.joined_to));
-  }
+  const Vec3 t = r.T_with_query.translation();
+  const Eigen::Quaterniond& q = r.T_with_query.rotation();
+  appendToLine(line, sizeof line, &n, "; edge utime %lld -> %lld t %.6f %.6f %.6f q %.9f %.9f %.9f %.9f",
+               static_cast<long long>(r.with_utime), static_cast<long long>(r.query_utime), t.x(), t.y(), t.z(), q.x(),
+               q.y(), q.z(), q.w());
   return line;
 }
 

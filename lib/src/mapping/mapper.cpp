@@ -72,6 +72,7 @@ class Mapper::Impl {
   MapChanges takeChanges() { return std::exchange(changes_, MapChanges{}); }
   const Map& map() const { return map_; }
   const LoopClosureCounters& loopClosures() const { return loop_closer_.counters(); }
+  const std::vector<LoopClosureResult>& loopsRecognised() const { return loop_closer_.recognised(); }
   long keyframesCulled() const { return keyframes_culled_; }
   MapParts parts() const;
   const AnchorCounts& anchors() const { return anchors_; }
@@ -577,6 +578,7 @@ bool Mapper::refine(const std::atomic<bool>* interrupt) { return impl_->refine(i
 MapChanges Mapper::takeChanges() { return impl_->takeChanges(); }
 const Map& Mapper::map() const { return impl_->map(); }
 const LoopClosureCounters& Mapper::loopClosures() const { return impl_->loopClosures(); }
+const std::vector<LoopClosureResult>& Mapper::loopsRecognised() const { return impl_->loopsRecognised(); }
 long Mapper::keyframesCulled() const { return impl_->keyframesCulled(); }
 MapParts Mapper::parts() const { return impl_->parts(); }
 const AnchorCounts& Mapper::anchors() const { return impl_->anchors(); }

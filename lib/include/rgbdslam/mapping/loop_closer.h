@@ -101,6 +101,11 @@ struct LoopClosureResult {
   double disagreement_m = 0.0;       // ...its translation [m]
   double disagreement_deg = 0.0;     // ...and rotation [deg]
   KeyframeId with = -1;       // the old keyframe recognised
+  // The loop edge as measured (the new keyframe in the recognised one's frame, from the
+  // verification alone) and both keyframes' acquisition times: what an audit against ground
+  // truth compares (eval/loop_audit.h), whatever the map made of the edge.
+  SE3 T_with_query;
+  int64_t with_utime = 0, query_utime = 0;  // [us]
   double correction_m = 0.0;  // the largest keyframe move [m]
   double correction_deg = 0.0;  // ...and turn [deg]
   double recognise_ms = 0.0, graph_ms = 0.0;
@@ -119,7 +124,9 @@ struct LoopClosureCounters {
 };
 
 // One line for a log: "loop with keyframe J: closed, disagreement 5.2 sigmas (0.031 m, 0.40
-// deg), correction 0.052 m, 0.61 deg" (empty when no place was recognised).
+// deg), correction 0.052 m, 0.61 deg; edge utime U_J -> U_K t X Y Z q QX QY QZ QW" (empty when
+// no place was recognised). The edge (T_with_query: metres, a unit quaternion) is for
+// scripts/lib/loop_audit.py, which checks a split run's loops against the ground truth.
 std::string describe(const LoopClosureResult& result);
 
 class LoopCloser {
@@ -132,6 +139,11 @@ class LoopCloser {
   // Keyframe 'id' was culled from the map (map_maintenance.h): no longer a place to close to.
   void onKeyframeRemoved(KeyframeId id);
   const LoopClosureCounters& counters() const { return counters_; }
+  // Every recognised place's verdict in order, the first kMaxRecognisedKept (~170 bytes
+  // each, 1.7 MB at most; a flight of ten minutes recognises tens): for rgbd-slam's audit
+  // against the ground truth (eval/loop_audit.h; rgbd-slam prints how many are past the cap).
+  static constexpr size_t kMaxRecognisedKept = 10000;
+  const std::vector<LoopClosureResult>& recognised() const { return recognised_; }
 
  private:
   struct Pending {
@@ -154,6 +166,7 @@ class LoopCloser {
   std::vector<Pending> pending_;           // keyframes' features until then
   std::vector<PoseGraphEdge> loops_;       // loop edges accepted so far
   LoopClosureCounters counters_;
+  std::vector<LoopClosureResult> recognised_;
 };
 
 }  // namespace rgbdslam

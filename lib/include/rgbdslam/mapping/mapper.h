@@ -173,6 +173,7 @@ class Mapper {
   MapChanges takeChanges();
   const Map& map() const;
   const LoopClosureCounters& loopClosures() const;
+  const std::vector<LoopClosureResult>& loopsRecognised() const;  // LoopCloser::recognised()
   long keyframesCulled() const;  // redundant keyframes removed so far
   MapParts parts() const;
   const AnchorCounts& anchors() const;
