@@ -9,7 +9,8 @@
 #     lcm-log-stats), at most 1 Mbit/s on average: the tracker's link budget (1000 kbit/s,
 #     counting the maps it receives: common/link_budget.h) held.
 # Sanity: every keyframe acknowledged; at least 600 frames posed (the flight's first 20 s,
-# which the batch runner tracks whole; the tracker is then lost for long stretches: open work).
+# which the batch runner tracks whole; the tracker is then lost for long stretches: open work);
+# every place the mapper recognised audited against the truth, and no wrong loop in the map.
 # Not bounded here: the ATE (real-time runs of the flight spread 0.04-3.7 m: its tracking is
 # open work) and the memory's course after the first minute (on jemalloc it rises for a
 # sample or two and comes back: a bound on two minutes would measure those spikes, not a
@@ -42,4 +43,10 @@ awk -v t="$total" -v m="$MAX_LINK_MBIT_S" 'BEGIN { exit !(t > 0 && t <= m) }' \
 [ "$(value keyframes_unacked "$dir/tracker.out")" = 0 ] || fail "keyframes left unacknowledged"
 poses=$(value poses "$dir/figures.txt")
 [ "$poses" -ge 600 ] || fail "only $poses of 3600 frames posed"
+# Loops (issue 11): every place the mapper recognised is audited against the truth
+# (scripts/lib/loop_audit.py reads its log line), and none in the map is wrong.
+[ "$(value loop_audit_checked "$dir/figures.txt")" = "$(value loops_recognised "$dir/figures.txt")" ] \
+  || fail "$(value loops_recognised "$dir/figures.txt") places recognised, $(value loop_audit_checked "$dir/figures.txt") audited"
+[ "$(value loops_accepted_wrong "$dir/figures.txt")" = 0 ] \
+  || fail "$(value loops_accepted_wrong "$dir/figures.txt") loop edges in the map are off the truth"
 echo "PASS"
