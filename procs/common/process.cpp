@@ -4,6 +4,7 @@
 
 #include <sched.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <csignal>
@@ -91,6 +92,13 @@ void printAnchors(const AnchorCounts& anchors) {
   std::printf("keyframes_placed_by_anchor %ld\nkeyframes_placed_by_stand_in %ld\nkeyframes_anchor_missing %ld\n"
               "keyframes_anchor_refused %ld\n",
               anchors.placed, anchors.stand_in, anchors.missing, anchors.refused);
+}
+
+Trajectory keyframeTrajectory(const Map& map) {
+  Trajectory trajectory;
+  for (const auto& [id, kf] : map.keyframes()) trajectory.push_back(TimedPose{static_cast<double>(kf->utime) * 1e-6, kf->T_w_c});
+  std::stable_sort(trajectory.begin(), trajectory.end(), [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
+  return trajectory;
 }
 
 void printLoopClosures(const LoopClosureCounters& loops) {

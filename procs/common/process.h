@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "rgbdslam/io/trajectory_io.h"
 #include "rgbdslam/mapping/loop_closer.h"
 #include "rgbdslam/mapping/mapper.h"
 #include "rgbdslam/mapping/map_maintenance.h"
@@ -47,6 +48,10 @@ void printLoopClosures(const LoopClosureCounters& loops);
 void printMapParts(const MapParts& parts);
 // keyframes_placed_by_anchor, _by_stand_in, keyframes_anchor_missing, _refused (mapper.h).
 void printAnchors(const AnchorCounts& anchors);
+// The map's keyframes at their poses now, in time order: the final map's trajectory (loops
+// closed and parts joined count; each unjoined part in its own frame), as ORB-SLAM2 writes
+// KeyFrameTrajectory.txt. rgbd-mapper --keyframes-out and rgbd-slam's ate_keyframes_rmse_m.
+Trajectory keyframeTrajectory(const Map& map);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its
 // bytes are memory after all (tracker.local_map_store_dir). Nothing for a null store.

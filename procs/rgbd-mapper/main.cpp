@@ -2,6 +2,7 @@
 // in order, runs bundle adjustment, publishes the map (SLAM_MAP) and its health
 // (MAPPER_STATUS), and journals its keyframes so a restart loses nothing. See --help.
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <optional>
 
@@ -25,6 +26,8 @@ CommandLine makeCommandLine() {
              "to a tracker started with the same file and id; a restart repeats both (its journal then holds what was added)");
   cli.option("map-id", "ID", "with --load-map: the id the map is served as (> 0; the tracker's --map-id)");
   cli.flag("fresh", "start a new map: move an existing journal aside (map.journal.old) first");
+  cli.option("keyframes-out", "FILE", "at exit, write the map's keyframes at their final poses (loops closed, parts "
+             "joined) as a TUM trajectory, as ORB-SLAM2's KeyFrameTrajectory.txt (default: none)");
   // Channels and periods are configuration (sections channels, mapper_node, sync).
   addLcmUrlOption(cli);
   return cli;
@@ -83,6 +86,10 @@ int main(int argc, char** argv) {
   if (cli.has("fresh") && !options.state_dir.empty()) {
     if (Status moved = moveJournalAside(options.state_dir); !moved) return usageError("rgbd-mapper", moved.error());
   }
+  // --keyframes-out is written at exit: a path that cannot be written is refused now, not after the flight.
+  if (cli.has("keyframes-out") && !std::ofstream(cli.get("keyframes-out"))) {
+    return usageError("rgbd-mapper", "--keyframes-out: cannot write " + cli.get("keyframes-out"));
+  }
   auto lcm = openLcm(cli.get("lcm-url"));
   if (!lcm) return usageError("rgbd-mapper", lcm.error());
   std::cerr << "rgbd-mapper: camera " << camera->name << ", state "
@@ -93,5 +100,11 @@ int main(int argc, char** argv) {
   if (Status restored = node.restore(start_map ? &*start_map : nullptr, map_id); !restored) return usageError("rgbd-mapper", restored.error());
   node.run(installStopHandlers());
   node.printSummary();
+  if (cli.has("keyframes-out")) {
+    if (Status written = writeTumTrajectory(cli.get("keyframes-out"), keyframeTrajectory(node.map())); !written) {
+      std::cerr << "rgbd-mapper: error: " << written.error() << "\n";
+      return 1;
+    }
+  }
   return 0;
 }

@@ -44,6 +44,7 @@ class MapperNode {
   // Subscribes, runs the worker, and returns when 'stop' becomes true.
   void run(const std::atomic<bool>& stop);
   void printSummary() const;
+  const Map& map() const { return mapper_.map(); }  // after run()
 
  private:
   void onKeyframe(const lcm::ReceiveBuffer* buffer, const std::string& channel);

@@ -371,6 +371,10 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     std::printf("ate_final_map_rmse_m %.6f\n", final_result->ate_m.rmse);
   }
   std::printf("final_map_poses %zu\nfinal_map_left_out %ld\n", final_map.size(), left_out);
+  // The final map's keyframes alone (rgbd-mapper --keyframes-out in a split run).
+  if (const auto keyframes = evaluateTrajectory(*groundtruth_, keyframeTrajectory(slam_->mapper().map()), EvalOptions{})) {
+    std::printf("ate_keyframes_rmse_m %.6f\nkeyframes_evaluated %zu\n", keyframes->ate_m.rmse, keyframes->num_associated);
+  }
   // Each part of the map on its own (map poses of the frames tracked in it, each part aligned
   // alone): how right the poses are where they are, whatever a part's guessed start.
   if (part_trajectories_.size() > 1) {
