@@ -148,6 +148,46 @@ TEST(LoopCloser, ClosesOnceAndThenAgrees) {
               LoopClosureOptions{}.agree_sigmas);
 }
 
+// A session that extends a saved map (rgbd-slam / rgbd-mapper --load-map): the loaded
+// keyframes, frames 0-400 at their saved poses, enter the loop closer as Mapper::load
+// enters them (places only, close=false); the session's keyframes, frames 420-1000, drift to
+// 12 cm and 3 deg, and the last ones see again the loaded place: the loop closes into the
+// loaded map, whose keyframes stay where the file put them (the oldest is fixed).
+TEST(LoopCloser, ClosesALoopIntoALoadedMap) {
+  constexpr int kLoadedLast = 20;  // keyframes 0-20: frames 0-400, from the file
+  const int keyframes = kLoopLastFrame / kLoopFrameStep + 1;
+  Map map;
+  LoopCloser closer(loopRoom().camera(), LoopClosureOptions{});
+  MapChanges changes;
+  std::vector<SE3> truth;
+  std::vector<LoopClosureResult> closures;
+  double drift_before = 0.0;
+  for (int k = 0; k < keyframes; ++k) {
+    const int frame = k * kLoopFrameStep;
+    truth.push_back(loopRoom().groundTruthPose(static_cast<size_t>(frame)));
+    const bool loaded = k <= kLoadedLast;
+    const double drift = loaded ? 0.0 : static_cast<double>(k - kLoadedLast) / (keyframes - 1 - kLoadedLast);
+    const Keyframe* kf = map.addKeyframe(loopKeyframe(k, frame, loopDrifted(truth.back(), drift)));
+    drift_before = std::max(drift_before, loopErrorM(kf->T_w_c, truth.back()));
+    const LoopClosureResult result = closer.onKeyframe(&map, k, &changes, /*close=*/!loaded);
+    if (loaded) {
+      EXPECT_FALSE(result.tried) << "loaded keyframe " << k << " queried";
+    }
+    if (result.closed) closures.push_back(result);
+  }
+  ASSERT_FALSE(closures.empty()) << closer.counters().queries << " queries, " << closer.counters().recognised << " recognised";
+  EXPECT_LE(closures.front().with, kLoadedLast) << "closed with a keyframe of the session, not of the loaded map";
+  for (int k = 0; k <= kLoadedLast; ++k) {
+    EXPECT_LT(loopErrorM(map.keyframe(k)->T_w_c, truth[k]), 0.01) << "loaded keyframe " << k << " moved off its pose";
+  }
+  double drift_after = 0.0;
+  for (int k = keyframes - 3; k < keyframes; ++k) drift_after = std::max(drift_after, loopErrorM(map.keyframe(k)->T_w_c, truth[k]));
+  EXPECT_LT(drift_after, drift_before / 3) << "drift " << drift_before << " m before the closure";
+  std::printf("closed into the loaded map with keyframe %ld: correction %.3f m %.2f deg; the session's end %.3f m off "
+              "(%.3f m before)\n", static_cast<long>(closures.front().with), closures.front().correction_m,
+              closures.front().correction_deg, drift_after, drift_before);
+}
+
 // Two identical rooms 10 m apart: the keyframes of the second look exactly like those of
 // the first, but odometry puts them 10 m away, far beyond the drift: nothing is closed.
 TEST(LoopCloser, ClosesNothingInALookalikeRoom) {

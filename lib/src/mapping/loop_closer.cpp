@@ -87,6 +87,7 @@ LoopCloser::~LoopCloser() = default;
 LoopClosureResult LoopCloser::onKeyframe(Map* map, KeyframeId id, MapChanges* changes, bool close) {
   LoopClosureResult result;
   const Keyframe* kf = map->keyframe(id);
+  if (!close) loaded_.insert(id);
   if (!options_.enabled || !kf || kf->cold() || kf->depth.empty()) return result;
   const auto start = LoopClock::now();
   FeatureRelocaliserOptions extract;
@@ -292,6 +293,7 @@ void LoopCloser::joinParts(Map* map, KeyframeId newer, KeyframeId older, MapChan
 
 void LoopCloser::onKeyframeRemoved(KeyframeId id) {
   if (places_) places_->remove(id);
+  loaded_.erase(id);
   pending_.erase(std::remove_if(pending_.begin(), pending_.end(), [id](const Pending& p) { return p.id == id; }),
                  pending_.end());
   loops_.erase(std::remove_if(loops_.begin(), loops_.end(),
@@ -326,6 +328,7 @@ PoseGraph LoopCloser::buildGraph(const Map& map, const PoseGraphEdge& loop) cons
   }
   graph.edges.push_back(loop);
   fixOldestOfEachComponent(&graph);
+  for (PoseGraphNode& node : graph.nodes) node.fixed = node.fixed || loaded_.count(node.id) > 0;
   return graph;
 }
 

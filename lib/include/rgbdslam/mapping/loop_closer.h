@@ -12,9 +12,10 @@
 //     loop_sigma_min_*) in a pose graph over all keyframes (pose_graph.h): odometry edges
 //     between consecutive keyframes from the current poses, with sigmas that grow with the
 //     step (odometry_sigma_*: what the drift between two keyframes may be), keyframe 0
-//     fixed, and the loop edges accepted before (mapper.h, "Parts": odometry edges only
-//     within a part, the oldest keyframe of each part that no loop edge joins fixed; a place
-//     recognised in another part joins the two, within join_max_speed_m_s);
+//     fixed (and a loaded map's keyframes: onKeyframe), and the loop edges accepted before
+//     (mapper.h, "Parts": odometry edges only within a part, the oldest keyframe of each
+//     part that no loop edge joins fixed; a place recognised in another part joins the
+//     two, within join_max_speed_m_s);
 //  3. a loop edge that already agrees with the map (its residual at the current poses within
 //     agree_sigmas of its own noise) has nothing to correct: it joins the loop edges kept for
 //     later closures (counted as agreed) and the map stays as it is, with no graph solved;
@@ -32,6 +33,7 @@
 // average (place_recognition.h), a pose graph only when a place is recognised.
 // Determinism: no randomness beyond the seeded RANSAC of the verification.
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -135,6 +137,9 @@ class LoopCloser {
   ~LoopCloser();
   // Keyframe 'id', just integrated into 'map' (ids increasing; a loaded map's keyframes
   // through here too, with 'close' false). Moved keyframes and points go into 'changes'.
+  // A loaded map is the reference a session extends: its keyframes are held fixed in every
+  // pose graph (as ORB-SLAM3 holds the older map when it merges two), so a loop closed into
+  // it bends only the session's keyframes, and the frame an earlier run localised in stays.
   LoopClosureResult onKeyframe(Map* map, KeyframeId id, MapChanges* changes, bool close = true);
   // Keyframe 'id' was culled from the map (map_maintenance.h): no longer a place to close to.
   void onKeyframeRemoved(KeyframeId id);
@@ -165,6 +170,7 @@ class LoopCloser {
   std::unique_ptr<PlaceDatabase> places_;  // made when first needed (the vocabulary costs ~2 s)
   std::vector<Pending> pending_;           // keyframes' features until then
   std::vector<PoseGraphEdge> loops_;       // loop edges accepted so far
+  std::set<KeyframeId> loaded_;            // a loaded map's keyframes: fixed in the graph
   LoopClosureCounters counters_;
   std::vector<LoopClosureResult> recognised_;
 };
