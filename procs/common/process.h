@@ -50,7 +50,8 @@ void printMapParts(const MapParts& parts);
 void printAnchors(const AnchorCounts& anchors);
 // The map's keyframes at their poses now, in time order: the final map's trajectory (loops
 // closed and parts joined count; each unjoined part in its own frame), as ORB-SLAM2 writes
-// KeyFrameTrajectory.txt. rgbd-mapper --keyframes-out and rgbd-slam's ate_keyframes_rmse_m.
+// KeyFrameTrajectory.txt. rgbd-mapper --keyframes-out and rgbd-slam's ate_keyframes_rmse_m: all
+// parts under one alignment, so metres while one is unjoined (map_parts beside it says so).
 Trajectory keyframeTrajectory(const Map& map);
 
 // A warning on stderr when the tracker's keyframe store is on tmpfs or ramfs, where its

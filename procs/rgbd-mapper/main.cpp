@@ -12,6 +12,7 @@
 #include "common/slam_config.h"
 #include "rgbd-mapper/mapper_node.h"
 #include "rgbdslam/camera/calibration_io.h"
+#include "rgbdslam/io/trajectory_io.h"
 
 using namespace rgbdslam;
 
@@ -27,7 +28,8 @@ CommandLine makeCommandLine() {
   cli.option("map-id", "ID", "with --load-map: the id the map is served as (> 0; the tracker's --map-id)");
   cli.flag("fresh", "start a new map: move an existing journal aside (map.journal.old) first");
   cli.option("keyframes-out", "FILE", "at exit, write the map's keyframes at their final poses (loops closed, parts "
-             "joined) as a TUM trajectory, as ORB-SLAM2's KeyFrameTrajectory.txt (default: none)");
+             "joined; a part never joined stays in its own frame) as a TUM trajectory, as ORB-SLAM2's "
+             "KeyFrameTrajectory.txt (default: none)");
   // Channels and periods are configuration (sections channels, mapper_node, sync).
   addLcmUrlOption(cli);
   return cli;
@@ -86,8 +88,9 @@ int main(int argc, char** argv) {
   if (cli.has("fresh") && !options.state_dir.empty()) {
     if (Status moved = moveJournalAside(options.state_dir); !moved) return usageError("rgbd-mapper", moved.error());
   }
-  // --keyframes-out is written at exit: a path that cannot be written is refused now, not after the flight.
-  if (cli.has("keyframes-out") && !std::ofstream(cli.get("keyframes-out"))) {
+  // --keyframes-out is written at exit: a path that cannot be written is refused now, not after
+  // the flight (opened to append: an earlier run's file stays until the exit's write replaces it).
+  if (cli.has("keyframes-out") && !std::ofstream(cli.get("keyframes-out"), std::ios::app)) {
     return usageError("rgbd-mapper", "--keyframes-out: cannot write " + cli.get("keyframes-out"));
   }
   auto lcm = openLcm(cli.get("lcm-url"));

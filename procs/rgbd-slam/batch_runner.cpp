@@ -371,7 +371,8 @@ void BatchRunner::printSummary(const Trajectory& trajectory) const {
     std::printf("ate_final_map_rmse_m %.6f\n", final_result->ate_m.rmse);
   }
   std::printf("final_map_poses %zu\nfinal_map_left_out %ld\n", final_map.size(), left_out);
-  // The final map's keyframes alone (rgbd-mapper --keyframes-out in a split run).
+  // The final map's keyframes alone (rgbd-mapper --keyframes-out in a split run), all parts
+  // under one alignment: metres while a part is unjoined (map_parts says how many).
   if (const auto keyframes = evaluateTrajectory(*groundtruth_, keyframeTrajectory(slam_->mapper().map()), EvalOptions{})) {
     std::printf("ate_keyframes_rmse_m %.6f\nkeyframes_evaluated %zu\n", keyframes->ate_m.rmse, keyframes->num_associated);
   }

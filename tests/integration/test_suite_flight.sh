@@ -43,6 +43,9 @@ awk -v t="$total" -v m="$MAX_LINK_MBIT_S" 'BEGIN { exit !(t > 0 && t <= m) }' \
 [ "$(value keyframes_unacked "$dir/tracker.out")" = 0 ] || fail "keyframes left unacknowledged"
 poses=$(value poses "$dir/figures.txt")
 [ "$poses" -ge 600 ] || fail "only $poses of 3600 frames posed"
+# The final map's keyframes (rgbd-mapper --keyframes-out) evaluated.
+awk -v a="$(value ate_keyframes_rmse_m "$dir/figures.txt")" 'BEGIN { exit !(a + 0 > 0) }' \
+  || fail "no ATE of the final map's keyframes: $(value ate_keyframes_rmse_m "$dir/figures.txt")"
 # Loops (issue 11): every place the mapper recognised is audited against the truth
 # (scripts/lib/loop_audit.py reads its log line), and none in the map is wrong.
 [ "$(value loop_audit_checked "$dir/figures.txt")" = "$(value loops_recognised "$dir/figures.txt")" ] \

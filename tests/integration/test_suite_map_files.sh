@@ -41,6 +41,7 @@ expect_usage_error "cannot open map file" rgbd-tracker --load-map "$WORK/missing
 head -c 5000 "$WORK/room.map" > "$WORK/cut.map"
 expect_usage_error "truncated at byte 5000" rgbd-mapper --load-map "$WORK/cut.map" --map-id 5 --state-dir none
 expect_usage_error "made in mode depth-ba" rgbd-tracker --load-map "$WORK/room.map" --map-id 5 --set slam.mode=mono
+expect_usage_error "cannot write" rgbd-mapper --keyframes-out "$WORK/missing-dir/keyframes.txt" --state-dir none
 
 link_up
 # Localising only.
