@@ -152,7 +152,7 @@ TEST(LoopCloser, ClosesOnceAndThenAgrees) {
 // keyframes, frames 0-400 at their saved poses, enter the loop closer as Mapper::load
 // enters them (places only, close=false); the session's keyframes, frames 420-1000, drift to
 // 12 cm and 3 deg, and the last ones see again the loaded place: the loop closes into the
-// loaded map, whose keyframes stay where the file put them (the oldest is fixed).
+// loaded map, whose keyframes stay where the file put them (all held fixed in the graph).
 TEST(LoopCloser, ClosesALoopIntoALoadedMap) {
   constexpr int kLoadedLast = 20;  // keyframes 0-20: frames 0-400, from the file
   const int keyframes = kLoopLastFrame / kLoopFrameStep + 1;
