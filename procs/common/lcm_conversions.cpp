@@ -338,8 +338,9 @@ Expected<MapPose> fromLcm(const rgbdslam::pose_t& msg) {
 namespace {
 
 // The centre pixel of each step x step block (no averaging: a mean across a depth edge would
-// invent a surface that is not there); expanded again by repetition, every pixel then reads
-// a measured depth at most step / 2 pixels away.
+// invent a surface that is not there); expanded again by repetition. The map reads a pixel
+// between four readings of one smooth surface as their interpolation, else as its block's
+// reading (map/keyframe_depth.h), so the sample must stay at the block's centre.
 cv::Mat subsampleDepth(const cv::Mat& depth, int step) {
   cv::Mat sparse((depth.rows + step - 1) / step, (depth.cols + step - 1) / step, CV_16UC1);
   for (int v = 0; v < sparse.rows; ++v) {

@@ -51,6 +51,16 @@ MapFileSample makeMapFileSample(const PinholeCamera& camera) {
         kf.depth.at<uint16_t>(v, u) = (u + v) % 11 == 0 ? 0 : static_cast<uint16_t>(raw(rng));
       }
     }
+    // Keyframe 3's depth as it comes over the link at every 4th pixel and row, decoded by
+    // repetition: a slope, whose readings the map interpolates between (map/keyframe_depth.h),
+    // and a block without a reading. The file keeps the readings, not the interpolation.
+    if (id == 3) {
+      for (int v = 0; v < camera.height; ++v) {
+        for (int u = 0; u < camera.width; ++u) {
+          kf.depth.at<uint16_t>(v, u) = u / 4 == 2 && v / 4 == 1 ? 0 : static_cast<uint16_t>(10000 + 20 * (u / 4) + 10 * (v / 4));
+        }
+      }
+    }
     kf.depth_scale = camera.depth_factor;
     s.keyframes.push_back(kf);
   }
