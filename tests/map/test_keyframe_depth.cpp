@@ -75,7 +75,7 @@ void expectSameMetres(const KeyframeDepth& depth, const cv::Mat& raw) {
 void expectReadsBetweenReadings(const KeyframeDepth& depth, const cv::Mat& sparse, int step) {
   const cv::Mat got = depth.metres();
   ASSERT_EQ(got.size(), cv::Size(depth.cols(), depth.rows()));
-  int wrong_validity = 0, wrong_centre = 0, outside = 0, differ = 0;
+  int wrong_validity = 0, wrong_centre = 0, outside = 0, differ = 0, valid = 0;
   for (int v = 0; v < depth.rows(); ++v) {
     for (int u = 0; u < depth.cols(); ++u) {
       const int i = u / step, j = v / step;
@@ -83,6 +83,7 @@ void expectReadsBetweenReadings(const KeyframeDepth& depth, const cv::Mat& spars
       differ += std::memcmp(&own, &b, sizeof(float)) != 0 ? 1 : 0;
       wrong_validity += std::isfinite(a) != std::isfinite(own) ? 1 : 0;
       if (!std::isfinite(own)) continue;
+      ++valid;
       if (u == i * step + step / 2 && v == j * step + step / 2) wrong_centre += a != own ? 1 : 0;
       float lo = own, hi = own;
       for (int jj = std::max(j - 1, 0); jj <= std::min(j + 1, sparse.rows - 1); ++jj) {
@@ -95,6 +96,7 @@ void expectReadsBetweenReadings(const KeyframeDepth& depth, const cv::Mat& spars
     }
   }
   EXPECT_EQ(differ, 0);
+  EXPECT_EQ(depth.validFraction(), static_cast<double>(valid) / (static_cast<double>(depth.cols()) * depth.rows()));
   EXPECT_EQ(wrong_validity, 0);
   EXPECT_EQ(wrong_centre, 0);
   EXPECT_EQ(outside, 0);
@@ -129,12 +131,13 @@ TEST(KeyframeDepth, APlaneBetweenReadingsIsInterpolated) {
     ASSERT_EQ(depth.step(), step);
     double worst = 0.0, worst_own = 0.0;
     int checked = 0;
-    // Inside the readings' lattice (beyond the outermost centres a pixel reads its own).
+    // Inside the readings' lattice (beyond the outermost centres along an axis a pixel reads
+    // its own block's readings along that axis).
     for (int v = step / 2; v <= 480 - step + step / 2; ++v) {
       for (int u = step / 2; u <= 640 - step + step / 2; ++u) {
         const double truth = 1.0 / planeInverseDepth(u, v);
         const float got = depth.at(u, v);
-        if (!std::isfinite(got)) continue;
+        ASSERT_TRUE(std::isfinite(got)) << u << "," << v;
         const int uc = u / step * step + step / 2, vc = v / step * step + step / 2;
         worst = std::max(worst, std::abs(got - truth));
         worst_own = std::max(worst_own, std::abs(1.0 / planeInverseDepth(uc, vc) - truth));
@@ -153,9 +156,15 @@ TEST(KeyframeDepth, APlaneBetweenReadingsIsInterpolated) {
     const KeyframeDepth depth(planeAtStep(step, rows, cols), kDepthScale, kMinM, kMaxM);
     ASSERT_EQ(depth.step(), step);
     double worst = 0.0;
+    int invalid = 0;
     for (int v = step / 2; v < rows; ++v) {
-      for (int u = step / 2; u < cols; ++u) worst = std::max(worst, std::abs(depth.at(u, v) - 1.0 / planeInverseDepth(u, v)));
+      for (int u = step / 2; u < cols; ++u) {
+        const float got = depth.at(u, v);
+        invalid += std::isfinite(got) ? 0 : 1;
+        if (std::isfinite(got)) worst = std::max(worst, std::abs(got - 1.0 / planeInverseDepth(u, v)));
+      }
     }
+    EXPECT_EQ(invalid, 0);
     EXPECT_LT(worst, 0.5 / kDepthScale + 1e-6);
   }
 }
@@ -170,9 +179,10 @@ TEST(KeyframeDepth, ReadingsFartherApartThanTheSpanAreNotInterpolated) {
   const KeyframeDepth depth(expandedDepth(sparse, step, 120, 160), kDepthScale, kMinM, kMaxM);
   for (int v = 20; v < 100; ++v) {
     const float near = depth.at(10 * step + step / 2 + 1, v), far = depth.at(30 * step + step / 2 + 1, v);
-    EXPECT_GT(near, 2.0f);
-    EXPECT_LT(near, 2.14f);
-    EXPECT_EQ(far, 2.0f);
+    EXPECT_GT(near, metresAsBefore(10000));
+    EXPECT_LT(near, metresAsBefore(10700));
+    EXPECT_EQ(far, metresAsBefore(10000));
+    EXPECT_EQ(depth.at(30 * step + step / 2 + 3, v), metresAsBefore(10900));  // the pixel's own block is the farther
   }
 }
 
