@@ -69,9 +69,9 @@ class KeyframeDepth {
  private:
   // Depth kept at a step: each block's reading was taken at the block's centre pixel, clipped
   // to the image in a last block cut by the border (procs/common/lcm_conversions.cpp,
-  // subsampleDepth). A pixel between four readings gets
-  // their bilinear interpolation in inverse depth, which is exact on a plane (inverse depth is
-  // affine in the pixel coordinates there), when the four are valid and span at most
+  // subsampleDepth). A pixel between four readings gets their bilinear interpolation in
+  // inverse depth, which is exact on a plane (inverse depth is affine in the pixel
+  // coordinates there), when the four are valid and span at most
   // kInterpolateSpan of their depth: a wall seen at a grazing angle, along a corridor, changes
   // depth by a few percent a block, and the block's own reading would be off by up to half a
   // block's change. Where the four disagree more (an object's edge) or one is missing, the
